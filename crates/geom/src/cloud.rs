@@ -122,13 +122,13 @@ impl PointCloud {
             self.len(),
             "point",
         )?;
-        if let Channel::Scalar(v) = &channel {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return Err(GeomError::InvalidInput(format!(
-                    "channel '{name}' value {i} is not finite ({})",
-                    v[i]
-                )));
-            }
+        if let Channel::Scalar(v) = &channel
+            && let Some(i) = v.iter().position(|x| !x.is_finite())
+        {
+            return Err(GeomError::InvalidInput(format!(
+                "channel '{name}' value {i} is not finite ({})",
+                v[i]
+            )));
         }
         self.channels.insert(name, channel);
         Ok(())

@@ -11,6 +11,7 @@ pub mod error;
 pub mod io;
 pub mod linalg;
 pub mod mesh;
+pub mod method;
 pub mod spatial;
 pub mod topology;
 
@@ -18,4 +19,10 @@ pub use aabb::Aabb;
 pub use cloud::{Channel, PointCloud};
 pub use error::{GeomError, Location, Result};
 pub use glam::DVec3;
+pub use linalg::{Covariance, SymEigen3, covariance, sym_eigen3, weighted_least_squares};
 pub use mesh::TriMesh;
+pub use spatial::{
+    ClosestHit, KnnTable, MeshBvh, Neighbor, PointIndex, RadiusTable, RayHit,
+    closest_point_on_triangle, mean_spacing,
+};
+pub use topology::{MeshTopology, OrientReport, TopologyReport};

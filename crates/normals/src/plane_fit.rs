@@ -1,0 +1,169 @@
+//! Plane-fitting normals: `pf` (Hoppe et al. 1992) and `wpf` (Gaussian-weighted,
+//! Pauly et al. 2003), the baselines of seed 000 Table 4.1 (§1.2.4, §1.2.5).
+//!
+//! The normal is the eigenvector of the smallest eigenvalue of the (weighted) covariance
+//! of the k nearest neighbours about their (weighted) centroid.
+
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+use reconbench_geom::PointCloud;
+use reconbench_geom::linalg::sym_eigen3;
+use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
+use serde::{Deserialize, Serialize};
+
+use crate::neighbors::{check_k, finish, knn_including_self};
+
+/// Relative eigenvalue gap under which a neighbourhood counts as degenerate (coincident
+/// or collinear points): the normal is then undetermined and reported as zero.
+const DEGENERATE_REL: f64 = 1e-12;
+
+/// Parameters of `pf`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlaneFitParams {
+    /// Neighbourhood size, the point itself included (seed 000: 30, ASSUMPTION B-06).
+    pub k: usize,
+    /// Neighbours of the MST orientation graph; 0 leaves normals unoriented.
+    pub orient_k: usize,
+}
+
+impl Default for PlaneFitParams {
+    fn default() -> Self {
+        // ASSUMPTION B-06: "30 and 40 ... respectively" read in order: PF k = 30.
+        Self {
+            k: 30,
+            orient_k: 18,
+        }
+    }
+}
+
+/// How `wpf` chooses the Gaussian width from the farthest of the k neighbours, `p_k`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SigmaRule {
+    /// sigma^2 = |p - p_k|^2 / 3: the farthest neighbour gets weight e^-3.
+    ThirdSquare,
+    /// sigma = |p - p_k| / 3: the farthest neighbour gets weight e^-9 (the ablation).
+    ThirdDistance,
+}
+
+/// Parameters of `wpf`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WeightedPlaneFitParams {
+    /// Neighbourhood size, the point itself included (seed 000: 40, ASSUMPTION B-06).
+    pub k: usize,
+    /// Gaussian width rule (ASSUMPTION B-08).
+    pub sigma_rule: SigmaRule,
+    /// Neighbours of the MST orientation graph; 0 leaves normals unoriented.
+    pub orient_k: usize,
+}
+
+impl Default for WeightedPlaneFitParams {
+    fn default() -> Self {
+        Self {
+            k: 40,
+            // ASSUMPTION B-08: "one third the square distance" read as sigma^2 = d_k^2 / 3.
+            sigma_rule: SigmaRule::ThirdSquare,
+            orient_k: 18,
+        }
+    }
+}
+
+/// `pf`: unweighted k-NN plane fit.
+#[derive(Debug, Clone, Default)]
+pub struct PlaneFit {
+    /// Parameters.
+    pub params: PlaneFitParams,
+}
+
+/// `wpf`: Gaussian-weighted k-NN plane fit.
+#[derive(Debug, Clone, Default)]
+pub struct WeightedPlaneFit {
+    /// Parameters.
+    pub params: WeightedPlaneFitParams,
+}
+
+/// Smallest-eigenvalue eigenvector of the weighted covariance of `row` (zero when the
+/// neighbourhood is degenerate). `weight(q)` gives the weight of neighbour position q.
+pub fn fit_plane_normal(points: &[DVec3], row: &[u32], weight: impl Fn(DVec3) -> f64) -> DVec3 {
+    let mut wsum = 0.0;
+    let mut c = DVec3::ZERO;
+    for &j in row {
+        let q = points[j as usize];
+        let w = weight(q);
+        wsum += w;
+        c += w * q;
+    }
+    if wsum <= 0.0 {
+        return DVec3::ZERO;
+    }
+    c /= wsum;
+    let mut m = DMat3::ZERO;
+    for &j in row {
+        let q = points[j as usize];
+        let d = q - c;
+        let w = weight(q);
+        m += DMat3::from_cols(d * (w * d.x), d * (w * d.y), d * (w * d.z));
+    }
+    match sym_eigen3(m) {
+        Ok(e) if e.values[1] > DEGENERATE_REL * e.values[2].max(f64::MIN_POSITIVE) => e.vectors[0],
+        _ => DVec3::ZERO,
+    }
+}
+
+impl NormalEstimator for PlaneFit {
+    fn name(&self) -> &str {
+        "pf"
+    }
+
+    fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
+        check_k("k", self.params.k, 3)?;
+        let pts = cloud.positions();
+        let nb = ctx.phase("knn", || knn_including_self(pts, self.params.k, 3))?;
+        ctx.checkpoint()?;
+        let normals: Vec<DVec3> = ctx.phase("fit", || {
+            (0..pts.len())
+                .into_par_iter()
+                .map(|i| fit_plane_normal(pts, nb.row(i), |_| 1.0))
+                .collect()
+        });
+        finish(pts, normals, self.params.orient_k, ctx)
+    }
+}
+
+impl NormalEstimator for WeightedPlaneFit {
+    fn name(&self) -> &str {
+        "wpf"
+    }
+
+    fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
+        check_k("k", self.params.k, 3)?;
+        let pts = cloud.positions();
+        let nb = ctx.phase("knn", || knn_including_self(pts, self.params.k, 3))?;
+        ctx.checkpoint()?;
+        let rule = self.params.sigma_rule;
+        let normals: Vec<DVec3> = ctx.phase("fit", || {
+            (0..pts.len())
+                .into_par_iter()
+                .map(|i| {
+                    let row = nb.row(i);
+                    let p = pts[i];
+                    let dk2 = row
+                        .iter()
+                        .map(|&j| pts[j as usize].distance_squared(p))
+                        .fold(0.0, f64::max);
+                    let sigma2 = match rule {
+                        SigmaRule::ThirdSquare => dk2 / 3.0,
+                        SigmaRule::ThirdDistance => dk2 / 9.0,
+                    };
+                    if sigma2 <= 0.0 {
+                        return DVec3::ZERO;
+                    }
+                    fit_plane_normal(pts, row, |q| (-q.distance_squared(p) / sigma2).exp())
+                })
+                .collect()
+        });
+        finish(pts, normals, self.params.orient_k, ctx)
+    }
+}
