@@ -73,6 +73,15 @@ pub enum GeomError {
         /// What is wrong and what is expected.
         message: String,
     },
+    /// A linear system has (numerically) dependent columns, so its least-squares solution
+    /// is not unique; e.g. a polynomial fit on too few or collinear samples.
+    #[error("rank-deficient system: numerical rank {rank} < {cols} unknowns")]
+    RankDeficient {
+        /// Numerical rank found.
+        rank: usize,
+        /// Number of unknowns (columns).
+        cols: usize,
+    },
     /// A file could not be parsed.
     #[error("{}: {location}: {message}", path.display())]
     Format {

@@ -1,1 +1,282 @@
-//! (in progress)
+//! Small dense linear algebra: symmetric 3x3 eigen-decomposition, (weighted) covariance of
+//! a point set and small weighted least squares.
+//!
+//! These are the building blocks of normal estimation (PCA of a neighbourhood), MLS and jet
+//! fitting. They are thin, validated wrappers around nalgebra 0.35: inputs are checked
+//! (non-finite values, lengths, weights) and reported as [`GeomError`] instead of panicking
+//! or silently producing NaN, and outputs follow fixed conventions (ascending eigenvalues,
+//! deterministic eigenvector signs) so that results are reproducible.
+
+use glam::{DMat3, DVec3};
+use nalgebra::{DMatrix, DVector, Matrix3};
+
+use crate::error::{GeomError, Result, check_finite};
+
+/// Maximum number of implicit QR sweeps for the 3x3 eigen-solver. A symmetric 3x3
+/// tridiagonal matrix converges in a handful of sweeps; the bound only turns a
+/// pathological non-convergence into an error instead of an endless loop.
+const EIGEN_MAX_ITER: usize = 1000;
+
+/// Maximum number of SVD sweeps in [`weighted_least_squares`] (same reasoning).
+const SVD_MAX_ITER: usize = 10_000;
+
+/// Eigen-decomposition of a symmetric 3x3 matrix.
+///
+/// `values` are ascending; `vectors[i]` is the unit eigenvector of `values[i]`. The vectors
+/// form a right-handed orthonormal basis (`vectors[2] == vectors[0].cross(vectors[1])`).
+/// Signs are made deterministic: the largest-magnitude component of `vectors[0]` and
+/// `vectors[1]` is positive (ties to the lower axis); `vectors[2]` follows from the
+/// cross product. For repeated eigenvalues any orthonormal basis of the eigenspace is
+/// correct; this one is whatever the solver produced, made orthonormal.
+///
+/// For PCA of a neighbourhood, `vectors[0]` (smallest variance) is the normal direction
+/// and `values[0] / (values[0] + values[1] + values[2])` the surface variation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SymEigen3 {
+    /// Eigenvalues in ascending order.
+    pub values: [f64; 3],
+    /// Unit eigenvectors, `vectors[i]` belonging to `values[i]`.
+    pub vectors: [DVec3; 3],
+}
+
+impl SymEigen3 {
+    /// Rebuilds `V diag(values) V^T` (useful to check the decomposition).
+    pub fn reconstruct(&self) -> DMat3 {
+        let mut m = DMat3::ZERO;
+        for i in 0..3 {
+            let v = self.vectors[i];
+            m += self.values[i] * outer(v, v);
+        }
+        m
+    }
+}
+
+/// Outer product `a b^T`.
+fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// Flips `v` so that its largest-magnitude component is positive.
+fn canonical_sign(v: DVec3) -> DVec3 {
+    let a = v.abs();
+    let c = if a.x >= a.y && a.x >= a.z {
+        v.x
+    } else if a.y >= a.z {
+        v.y
+    } else {
+        v.z
+    };
+    if c < 0.0 { -v } else { v }
+}
+
+/// Eigen-decomposition of the symmetric 3x3 matrix `m` (see [`SymEigen3`]).
+///
+/// Only the symmetric part `(m + m^T) / 2` is used, so a matrix that is symmetric up to
+/// rounding is fine. The matrix is scaled by its largest entry before the solve, so
+/// very large or very small magnitudes do not overflow; the values are scaled back.
+/// Repeated (double, triple) eigenvalues are handled: the vectors are still orthonormal.
+///
+/// Errors: [`GeomError::NonFinite`] (naming the column) for NaN/infinite entries, and
+/// [`GeomError::InvalidInput`] if the iteration does not converge (not expected for
+/// finite input).
+pub fn sym_eigen3(m: DMat3) -> Result<SymEigen3> {
+    check_finite("matrix column", &[m.x_axis, m.y_axis, m.z_axis])?;
+    let sym = 0.5 * (m + m.transpose());
+    let scale = sym
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |s, x| s.max(x.abs()));
+    if scale == 0.0 {
+        return Ok(SymEigen3 {
+            values: [0.0; 3],
+            vectors: [DVec3::X, DVec3::Y, DVec3::Z],
+        });
+    }
+    let s = sym * (1.0 / scale);
+    // nalgebra is column-major like glam; the matrix is symmetric anyway.
+    let nm = Matrix3::from_fn(|r, c| s.col(c)[r]);
+    let eig = nm
+        .try_symmetric_eigen(f64::EPSILON, EIGEN_MAX_ITER)
+        .ok_or_else(|| {
+            GeomError::InvalidInput(
+                "symmetric 3x3 eigen-decomposition did not converge".to_string(),
+            )
+        })?;
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let col = |i: usize| {
+        let c = eig.eigenvectors.column(i);
+        DVec3::new(c[0], c[1], c[2])
+    };
+    // Re-orthonormalise (Gram-Schmidt + cross product): removes the last ulps of
+    // non-orthogonality and makes the basis right-handed.
+    let v0 = canonical_sign(col(order[0]).normalize());
+    let v1 = col(order[1]);
+    let v1 = canonical_sign((v1 - v1.dot(v0) * v0).normalize());
+    let v2 = v0.cross(v1);
+    if !(v0.is_finite() && v1.is_finite() && v2.is_finite()) {
+        return Err(GeomError::InvalidInput(
+            "symmetric 3x3 eigen-decomposition produced degenerate eigenvectors".to_string(),
+        ));
+    }
+    let values = order.map(|i| eig.eigenvalues[i] * scale);
+    Ok(SymEigen3 {
+        values,
+        vectors: [v0, v1, v2],
+    })
+}
+
+/// Weighted mean and covariance of a point set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Covariance {
+    /// Weighted centroid `sum w_i p_i / sum w_i`.
+    pub centroid: DVec3,
+    /// Weighted covariance `sum w_i (p_i - c)(p_i - c)^T / sum w_i` (population
+    /// normalisation, no Bessel correction: PCA only needs the shape of the matrix).
+    pub matrix: DMat3,
+    /// `sum w_i` (the number of points when unweighted).
+    pub weight_sum: f64,
+}
+
+/// Centroid and covariance matrix of `points`, optionally weighted.
+///
+/// Uses two passes (centroid first, then centred outer products), which keeps precision
+/// for clouds far from the origin. `weights`, when given, must have one finite,
+/// non-negative value per point with a positive sum.
+///
+/// Errors: empty input, non-finite points, weight length mismatch, negative or non-finite
+/// weights, zero total weight.
+pub fn covariance(points: &[DVec3], weights: Option<&[f64]>) -> Result<Covariance> {
+    if points.is_empty() {
+        return Err(GeomError::InvalidInput(
+            "covariance of an empty point set".to_string(),
+        ));
+    }
+    check_finite("point", points)?;
+    if let Some(w) = weights {
+        crate::error::check_len("weights", w.len(), points.len(), "point")?;
+        if let Some(i) = w.iter().position(|x| !x.is_finite() || *x < 0.0) {
+            return Err(GeomError::InvalidParameter {
+                name: "weights",
+                message: format!("weight {i} is {} (must be finite and >= 0)", w[i]),
+            });
+        }
+    }
+    let weight = |i: usize| weights.map_or(1.0, |w| w[i]);
+    let mut wsum = 0.0;
+    let mut acc = DVec3::ZERO;
+    for (i, &p) in points.iter().enumerate() {
+        let wi = weight(i);
+        wsum += wi;
+        acc += wi * p;
+    }
+    if wsum <= 0.0 {
+        return Err(GeomError::InvalidParameter {
+            name: "weights",
+            message: "the weights sum to zero".to_string(),
+        });
+    }
+    let centroid = acc / wsum;
+    let mut m = DMat3::ZERO;
+    for (i, &p) in points.iter().enumerate() {
+        let d = p - centroid;
+        m += outer(weight(i) * d, d);
+    }
+    Ok(Covariance {
+        centroid,
+        matrix: m * (1.0 / wsum),
+        weight_sum: wsum,
+    })
+}
+
+/// Solves the weighted least-squares problem `min_x sum_i w_i (a_i . x - b_i)^2`.
+///
+/// `a_rows` is the `m x n` design matrix in row-major order (`m = a_rows.len() / n`), `b`
+/// has `m` values and `w` has `m` non-negative weights (or is empty for unit weights).
+/// The rows are scaled by `sqrt(w_i)`, the columns are equilibrated to unit norm (so that
+/// e.g. monomials of very different magnitudes do not spoil the rank test), and the
+/// system is solved by SVD.
+///
+/// The numerical rank counts singular values above `sigma_max * max(m, n) * f64::EPSILON`
+/// (the LAPACK/NumPy default); a rank below `n` (including `m < n` effective rows, or an
+/// all-zero column) is reported as [`GeomError::RankDeficient`] rather than returning an
+/// arbitrary minimum-norm solution, because callers (MLS, jet fits) must then fall back
+/// to a lower degree.
+///
+/// Errors: `n == 0`, lengths that do not match, non-finite entries, negative weights,
+/// rank deficiency.
+pub fn weighted_least_squares(a_rows: &[f64], b: &[f64], w: &[f64], n: usize) -> Result<Vec<f64>> {
+    if n == 0 {
+        return Err(GeomError::InvalidParameter {
+            name: "n",
+            message: "the number of unknowns must be positive".to_string(),
+        });
+    }
+    let m = a_rows.len() / n;
+    if m * n != a_rows.len() {
+        return Err(GeomError::InvalidInput(format!(
+            "design matrix has {} values, not a multiple of n = {n} columns",
+            a_rows.len()
+        )));
+    }
+    crate::error::check_len("right-hand side", b.len(), m, "row")?;
+    if !w.is_empty() {
+        crate::error::check_len("weights", w.len(), m, "row")?;
+    }
+    if let Some(i) = a_rows.iter().position(|x| !x.is_finite()) {
+        return Err(GeomError::InvalidInput(format!(
+            "design matrix entry ({}, {}) is not finite ({})",
+            i / n,
+            i % n,
+            a_rows[i]
+        )));
+    }
+    if let Some(i) = b.iter().position(|x| !x.is_finite()) {
+        return Err(GeomError::InvalidInput(format!(
+            "right-hand side value {i} is not finite ({})",
+            b[i]
+        )));
+    }
+    if let Some(i) = w.iter().position(|x| !x.is_finite() || *x < 0.0) {
+        return Err(GeomError::InvalidParameter {
+            name: "weights",
+            message: format!("weight {i} is {} (must be finite and >= 0)", w[i]),
+        });
+    }
+    if m < n {
+        return Err(GeomError::RankDeficient { rank: m, cols: n });
+    }
+    let sw = |i: usize| if w.is_empty() { 1.0 } else { w[i].sqrt() };
+    let mut a = DMatrix::from_fn(m, n, |r, c| sw(r) * a_rows[r * n + c]);
+    let rhs = DVector::from_fn(m, |r, _| sw(r) * b[r]);
+    let mut col_scale = vec![0.0; n];
+    for c in 0..n {
+        let norm = a.column(c).norm();
+        if !(norm > 0.0 && norm.is_finite()) {
+            return Err(GeomError::RankDeficient {
+                rank: n - 1,
+                cols: n,
+            });
+        }
+        col_scale[c] = 1.0 / norm;
+        a.column_mut(c).scale_mut(col_scale[c]);
+    }
+    let svd = nalgebra::SVD::try_new(a, true, true, f64::EPSILON, SVD_MAX_ITER)
+        .ok_or_else(|| GeomError::InvalidInput("least-squares SVD did not converge".to_string()))?;
+    let smax = svd.singular_values.max();
+    let tol = smax * (m.max(n) as f64) * f64::EPSILON;
+    let rank = svd.rank(tol);
+    if rank < n {
+        return Err(GeomError::RankDeficient { rank, cols: n });
+    }
+    let x = svd
+        .solve(&rhs, tol)
+        .map_err(|e| GeomError::InvalidInput(format!("least-squares solve failed: {e}")))?;
+    let out: Vec<f64> = (0..n).map(|c| x[c] * col_scale[c]).collect();
+    if out.iter().any(|v| !v.is_finite()) {
+        return Err(GeomError::InvalidInput(
+            "least-squares solution is not finite".to_string(),
+        ));
+    }
+    Ok(out)
+}
