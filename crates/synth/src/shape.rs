@@ -130,7 +130,11 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
             for w in c.points.windows(2) {
                 let d = w[1] - w[0];
                 let l2 = d.length_squared();
-                let t = if l2 == 0.0 { 0.0 } else { ((p - w[0]).dot(d) / l2).clamp(0.0, 1.0) };
+                let t = if l2 == 0.0 {
+                    0.0
+                } else {
+                    ((p - w[0]).dot(d) / l2).clamp(0.0, 1.0)
+                };
                 best = best.min((p - (w[0] + d * t)).length());
             }
         }
@@ -145,7 +149,11 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         crate::raycast::sphere_trace(
             &|p: DVec3| {
                 let sp = self.closest_point(p);
-                let s = if self.is_inside(p) { -sp.distance } else { sp.distance };
+                let s = if self.is_inside(p) {
+                    -sp.distance
+                } else {
+                    sp.distance
+                };
                 (s, sp.normal)
             },
             origin,

@@ -1,0 +1,369 @@
+//! `gauss-map-adaptive`: the local-adaptive refinement of the Gauss-map detector (Weber
+//! 2011, ch. 3.6; seed 002 §4).
+//!
+//! 1. First pass: the global method with a low sigma0 and a large k0, giving an
+//!    over-complete candidate set (about 10 % of the cloud in the thesis).
+//! 2. Refinement, candidate by candidate in ascending index order: while at least
+//!    `ceil(stop_share * |M|)` points of the candidate's neighbourhood M are candidates,
+//!    make the test locally stricter (sigma *= 1.1, k -= 1) and re-test the candidate and
+//!    every candidate of M with it; failures are removed (points are never added).
+//!    Passes repeat until one removes nothing (or `max_outer`).
+//! 3. Isolated-outlier rule: a candidate with at most one other candidate among its k0
+//!    neighbours is removed.
+//!
+//! The re-tests of one refinement step are independent of each other, so they run in
+//! parallel; the loop itself is sequential (it is order dependent by design), so results
+//! do not depend on the thread count.
+
+use std::cell::RefCell;
+use std::f64::consts::FRAC_PI_2;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use reconbench_geom::PointCloud;
+use reconbench_geom::method::{
+    Diagnostic, Diagnostics, FeatureClass, FeatureDetector, FeatureLabels, MethodError, RunCtx,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::common::{bad_param, check_range, count_labels, knn_excluding_self, num};
+use crate::gauss_map::{
+    FlatReference, GaussTest, GaussWorkspace, PointOutcome, THESIS_FLAT_TAU, stage_counts,
+    test_all, trivial_labels,
+};
+
+thread_local! {
+    /// One Gauss-map workspace per thread for the small parallel re-test batches (no
+    /// allocation per re-test once grown).
+    static WORKSPACE: RefCell<GaussWorkspace> = RefCell::new(GaussWorkspace::new());
+}
+
+/// Parameters of `gauss-map-adaptive` (angles in radians; sizes in points).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GaussMapAdaptiveParams {
+    /// Initial (and first-pass) neighbourhood size; thesis 20 (§3.7.4).
+    pub k0: usize,
+    /// Initial (and first-pass) clustering distance; thesis 0.1 (§3.7.4).
+    pub sigma0: f64,
+    /// Factor applied to sigma per refinement step; thesis 1.10 ("raise sigma by 10 %").
+    pub sigma_growth: f64,
+    /// Decrement of k per refinement step; thesis 1.
+    pub k_step: usize,
+    /// Refinement continues while at least `ceil(stop_share * |M|)` neighbours are
+    /// candidates; thesis 0.30.
+    pub stop_share: f64,
+    /// Refinement of a candidate stops once sigma would exceed this; thesis 1.2.
+    pub sigma_max: f64,
+    /// Floor of k; thesis 8.
+    pub k_min: usize,
+    /// ASSUMPTION W-11: false (default) clamps k at `k_min` and lets `sigma_max` end the
+    /// loop; true ends the loop when k would drop below `k_min`.
+    pub kmin_is_break: bool,
+    /// ASSUMPTION W-12: most refinement steps per candidate (30).
+    pub max_inner: usize,
+    /// ASSUMPTION W-12: most passes over the candidates (10).
+    pub max_outer: usize,
+    /// ASSUMPTION W-13: remove candidates with at most one other candidate among their k0
+    /// neighbours (true).
+    pub isolated_rule: bool,
+    /// ASSUMPTION W-10: false (default, literal pseudo-code) counts candidates in the
+    /// fixed k0-neighbourhood; true recounts in the current-k neighbourhood with
+    /// `ceil(stop_share * k)`.
+    pub recount_with_current_k: bool,
+    /// Flatness threshold in radians (ASSUMPTION W-05: 0.15 pi/2); negative disables it.
+    pub flat_tau: f64,
+    /// Flatness reference line (ASSUMPTION W-04).
+    pub flat_reference: FlatReference,
+    /// ASSUMPTION W-18: sine floor for triangles in the flatness statistic (0 = all).
+    pub flat_min_sine: f64,
+    /// Minimum cluster size as a fraction of the normals (ASSUMPTION W-06: 0.10).
+    pub min_cluster_frac: f64,
+    /// Minimum cluster size in normals (ASSUMPTION W-06: 3).
+    pub min_cluster_abs: usize,
+    /// Fewest surviving clusters for a feature (thesis: 2).
+    pub min_clusters: usize,
+    /// Most surviving clusters for a feature (thesis: 4).
+    pub max_clusters: usize,
+    /// Degenerate-triangle threshold (ASSUMPTION W-02: 1e-6).
+    pub eps_deg: f64,
+}
+
+impl Default for GaussMapAdaptiveParams {
+    fn default() -> Self {
+        Self {
+            k0: 20,
+            sigma0: 0.1,
+            sigma_growth: 1.10,
+            k_step: 1,
+            stop_share: 0.30,
+            sigma_max: 1.2,
+            k_min: 8,
+            kmin_is_break: false,
+            max_inner: 30,
+            max_outer: 10,
+            isolated_rule: true,
+            recount_with_current_k: false,
+            flat_tau: THESIS_FLAT_TAU,
+            flat_reference: FlatReference::PrincipalAxis,
+            flat_min_sine: 0.0,
+            min_cluster_frac: 0.10,
+            min_cluster_abs: 3,
+            min_clusters: 2,
+            max_clusters: 4,
+            eps_deg: 1e-6,
+        }
+    }
+}
+
+impl GaussMapAdaptiveParams {
+    /// The shared per-point test settings.
+    pub fn test(&self) -> GaussTest {
+        GaussTest {
+            flat_tau: (self.flat_tau >= 0.0).then_some(self.flat_tau),
+            flat_reference: self.flat_reference,
+            flat_min_sine: self.flat_min_sine,
+            min_cluster_frac: self.min_cluster_frac,
+            min_cluster_abs: self.min_cluster_abs,
+            min_clusters: self.min_clusters,
+            max_clusters: self.max_clusters,
+            eps_deg: self.eps_deg,
+        }
+    }
+
+    /// Checks ranges.
+    pub fn validate(&self) -> Result<(), MethodError> {
+        if self.k0 < 2 {
+            return Err(bad_param(
+                "k0",
+                format!("must be at least 2, got {}", self.k0),
+            ));
+        }
+        if self.k_min < 2 || self.k_min > self.k0 {
+            return Err(bad_param(
+                "k_min",
+                format!("must be in [2, k0 = {}], got {}", self.k0, self.k_min),
+            ));
+        }
+        check_range("sigma0", self.sigma0, 0.0, FRAC_PI_2)?;
+        check_range("sigma_max", self.sigma_max, 0.0, FRAC_PI_2)?;
+        check_range("sigma_growth", self.sigma_growth, 1.0, 10.0)?;
+        check_range("stop_share", self.stop_share, 0.0, 1.0)?;
+        if !self.flat_tau.is_finite() {
+            return Err(bad_param("flat_tau", "must be finite"));
+        }
+        if self.max_inner > u16::MAX as usize - 1 {
+            return Err(bad_param(
+                "max_inner",
+                format!("must be below {}", u16::MAX),
+            ));
+        }
+        self.test().validate()
+    }
+
+    /// The refinement schedule: `(k, sigma)` of steps 1, 2, ... (seed 002 §4.3 lines
+    /// 11-12): sigma *= growth and k -= k_step (clamped at `k_min`, ASSUMPTION W-11) until
+    /// sigma exceeds `sigma_max` or `max_inner` steps.
+    pub fn schedule(&self, k0_eff: usize) -> Vec<(usize, f64)> {
+        let mut out = Vec::new();
+        let (mut k, mut sigma) = (k0_eff, self.sigma0);
+        let k_min = self.k_min.min(k0_eff);
+        for _ in 0..self.max_inner {
+            sigma *= self.sigma_growth;
+            if k < k_min + self.k_step {
+                if self.kmin_is_break && self.k_step > 0 {
+                    break;
+                }
+                k = k_min.max(k.saturating_sub(self.k_step));
+            } else {
+                k -= self.k_step;
+            }
+            if sigma > self.sigma_max {
+                break;
+            }
+            out.push((k, sigma));
+        }
+        out
+    }
+}
+
+/// The `gauss-map-adaptive` detector.
+#[derive(Debug, Clone, Default)]
+pub struct GaussMapAdaptive {
+    /// Parameters.
+    pub params: GaussMapAdaptiveParams,
+}
+
+impl GaussMapAdaptive {
+    /// A detector with `params`.
+    pub fn new(params: GaussMapAdaptiveParams) -> Self {
+        Self { params }
+    }
+}
+
+/// Number of candidates refined between two time-budget checkpoints.
+const CHECK_EVERY: usize = 64;
+
+impl FeatureDetector for GaussMapAdaptive {
+    fn name(&self) -> &str {
+        "gauss-map-adaptive"
+    }
+
+    fn detect(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<FeatureLabels, MethodError> {
+        let p = &self.params;
+        p.validate()?;
+        let points = cloud.positions();
+        let n = points.len();
+        if n < 3 {
+            return Ok(trivial_labels(n, self.name()));
+        }
+        let table = knn_excluding_self(points, p.k0, ctx)?;
+        let k0 = table.k;
+        let test = p.test();
+
+        // 1. First pass: global method with (k0, sigma0).
+        let first = test_all(points, &table, k0, p.sigma0, &test, "first-pass", ctx)?;
+        let mut cand: Vec<bool> = first
+            .iter()
+            .map(|o| o.class != FeatureClass::None)
+            .collect();
+        let mut class: Vec<FeatureClass> = first.iter().map(|o| o.class).collect();
+        let mut clusters: Vec<u32> = first.iter().map(|o| o.clusters).collect();
+        let first_count = cand.iter().filter(|&&c| c).count();
+
+        // 2. Refinement.
+        let t0 = Instant::now();
+        let schedule = p.schedule(k0);
+        // passed_at[i] = step + 1 of the last passed re-test (0 = none): a re-test with the
+        // same step (same k and sigma) would give the same answer, so it is skipped.
+        let mut passed_at: Vec<u16> = vec![0; n];
+        let mut removed_per_pass = Vec::new();
+        let mut tests_run = 0usize;
+        let mut tests_skipped = 0usize;
+        let mut batch: Vec<u32> = Vec::with_capacity(k0 + 1);
+        let mut results: Vec<PointOutcome> = Vec::with_capacity(k0 + 1);
+        for _pass in 0..p.max_outer {
+            let mut removed = 0usize;
+            let snapshot: Vec<usize> = (0..n).filter(|&i| cand[i]).collect();
+            for (ci, &c) in snapshot.iter().enumerate() {
+                if ci % CHECK_EVERY == 0 {
+                    ctx.checkpoint()?;
+                }
+                if !cand[c] {
+                    continue;
+                }
+                let row = table.indices(c);
+                let mut k_cur = k0;
+                let mut step = 0usize;
+                loop {
+                    // ASSUMPTION W-10: the counting neighbourhood M is fixed at k0 (literal
+                    // pseudo-code) unless `recount_with_current_k`.
+                    let m = if p.recount_with_current_k {
+                        &row[..k_cur]
+                    } else {
+                        row
+                    };
+                    let thr = (p.stop_share * m.len() as f64).ceil() as usize;
+                    let count = m.iter().filter(|&&q| cand[q as usize]).count();
+                    if count < thr || step >= schedule.len() {
+                        break;
+                    }
+                    let (k, sigma) = schedule[step];
+                    step += 1;
+                    k_cur = k;
+                    // Re-test c and every still-candidate neighbour with (k, sigma).
+                    batch.clear();
+                    batch.extend(
+                        std::iter::once(c as u32)
+                            .chain(m.iter().copied())
+                            .filter(|&q| {
+                                let q = q as usize;
+                                cand[q] && passed_at[q] != step as u16
+                            }),
+                    );
+                    tests_skipped += std::iter::once(c as u32)
+                        .chain(m.iter().copied())
+                        .filter(|&q| cand[q as usize] && passed_at[q as usize] == step as u16)
+                        .count();
+                    tests_run += batch.len();
+                    batch
+                        .par_iter()
+                        .map(|&q| {
+                            let q = q as usize;
+                            let nb = &table.indices(q)[..k];
+                            WORKSPACE.with_borrow_mut(|ws| {
+                                test.test_point(points, points[q], nb, sigma, ws)
+                            })
+                        })
+                        .collect_into_vec(&mut results);
+                    for (&q, o) in batch.iter().zip(&results) {
+                        let q = q as usize;
+                        clusters[q] = o.clusters;
+                        if o.class == FeatureClass::None {
+                            cand[q] = false;
+                            class[q] = FeatureClass::None;
+                            removed += 1;
+                        } else {
+                            class[q] = o.class;
+                            passed_at[q] = step as u16;
+                        }
+                    }
+                }
+            }
+            removed_per_pass.push(removed as f64);
+            if removed == 0 {
+                break;
+            }
+        }
+        ctx.timer
+            .phases
+            .push(("refine".to_string(), t0.elapsed().as_secs_f64()));
+
+        // 3. ASSUMPTION W-13: isolated-outlier rule, sequential in ascending index order,
+        // on the k0-neighbourhood (self excluded).
+        let mut isolated = 0usize;
+        if p.isolated_rule {
+            ctx.phase("isolated", || {
+                for c in 0..n {
+                    if cand[c]
+                        && table
+                            .indices(c)
+                            .iter()
+                            .filter(|&&q| cand[q as usize])
+                            .count()
+                            <= 1
+                    {
+                        cand[c] = false;
+                        class[c] = FeatureClass::None;
+                        isolated += 1;
+                    }
+                }
+            });
+        }
+
+        let mut diagnostics = Diagnostics::new();
+        num(&mut diagnostics, "points", n as f64);
+        num(&mut diagnostics, "k0_effective", k0 as f64);
+        stage_counts(&first, "first_pass_", &mut diagnostics);
+        num(&mut diagnostics, "first_pass_features", first_count as f64);
+        num(
+            &mut diagnostics,
+            "first_pass_share",
+            first_count as f64 / n as f64,
+        );
+        num(&mut diagnostics, "passes", removed_per_pass.len() as f64);
+        diagnostics.insert(
+            "removed_per_pass".into(),
+            Diagnostic::Series(removed_per_pass),
+        );
+        num(&mut diagnostics, "retests", tests_run as f64);
+        num(&mut diagnostics, "retests_skipped", tests_skipped as f64);
+        num(&mut diagnostics, "isolated_removed", isolated as f64);
+        count_labels(&class, &mut diagnostics);
+        Ok(FeatureLabels {
+            labels: class,
+            scores: Some(clusters.iter().map(|&c| f64::from(c)).collect()),
+            diagnostics,
+        })
+    }
+}
