@@ -1,0 +1,162 @@
+//! `reconbench eval`, `eval-normals` and `eval-features`: metrics of one output against
+//! ground truth (keys and formulas in docs/METRICS.md).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use reconbench_geom::io;
+use reconbench_metrics::{
+    CleanPositions, FeatureOptions, MeshEvalOptions, NormalGroundTruth, NormalOptions, Reference,
+    Report, Value, eval_cloud_features, eval_cloud_normals, eval_mesh,
+};
+
+use super::{CliError, CliResult};
+
+/// Arguments of `eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// Reconstructed mesh.
+    #[arg(long)]
+    mesh: PathBuf,
+    /// Ground truth: a shape spec (`torus`, `box`, ...) or a mesh file.
+    #[arg(long)]
+    reference: String,
+    /// Minimum number of area-uniform samples per side (default 100000; at least
+    /// 10 x faces are taken).
+    #[arg(long)]
+    samples: Option<usize>,
+    /// Sampling seed.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Also count self-intersecting face pairs.
+    #[arg(long)]
+    self_intersections: bool,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Arguments of `eval-normals`.
+#[derive(Debug, Args)]
+pub struct EvalNormalsArgs {
+    /// Cloud with estimated normals (nx ny nz).
+    #[arg(long)]
+    cloud: PathBuf,
+    /// Ground truth: a shape spec or a mesh file (normal at the closest point), used
+    /// when --gt-cloud is not given.
+    #[arg(long)]
+    reference: Option<String>,
+    /// The cloud written by `reconbench gen`: GT normals at each point's source sample.
+    #[arg(long)]
+    gt_cloud: Option<PathBuf>,
+    /// Also report oriented errors and the flip rate.
+    #[arg(long)]
+    oriented: bool,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Arguments of `eval-features`.
+#[derive(Debug, Args)]
+pub struct EvalFeaturesArgs {
+    /// Cloud with a `feature` label channel (nonzero = detected).
+    #[arg(long)]
+    cloud: PathBuf,
+    /// Ground truth: a shape spec (feature curves come from the shape).
+    #[arg(long)]
+    reference: String,
+    /// The cloud written by `reconbench gen` (clean positions through source ids);
+    /// without it the cloud's clean_x/y/z channels, else its own positions, are used.
+    #[arg(long)]
+    gt_cloud: Option<PathBuf>,
+    /// A curve counts when its normal deviation is at least this (degrees).
+    #[arg(long, default_value_t = 20.0)]
+    feature_angle: f64,
+    /// Radius r as a multiple of the mean spacing.
+    #[arg(long, default_value_t = 1.0)]
+    radius_factor: f64,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+fn print_report(r: &impl Report, json: bool) -> CliResult {
+    if json {
+        return super::print_json(&r.to_json());
+    }
+    for (k, v) in r.entries() {
+        let s = match v {
+            Value::Bool(b) => b.to_string(),
+            Value::Int(i) => i.to_string(),
+            Value::Num(x) => format!("{x:.6e}"),
+            Value::Text(t) => t,
+            Value::Null => "-".into(),
+        };
+        println!("{k:<28} {s}");
+    }
+    Ok(())
+}
+
+/// `reconbench eval`.
+pub fn eval(a: EvalArgs) -> CliResult {
+    let mesh = io::read_mesh(&a.mesh).map_err(CliError::input)?;
+    let reference = Reference::from_arg(&a.reference).map_err(CliError::input)?;
+    let mut opts = MeshEvalOptions::default();
+    if let Some(n) = a.samples {
+        opts.distance.min_samples = n;
+    }
+    opts.distance.seed = a.seed;
+    opts.topology.self_intersections = a.self_intersections;
+    let e = eval_mesh(&mesh, &reference, &opts).map_err(CliError::input)?;
+    print_report(&e, a.json)
+}
+
+/// `reconbench eval-normals`.
+pub fn eval_normals(a: EvalNormalsArgs) -> CliResult {
+    let cloud = io::read_cloud(&a.cloud).map_err(CliError::input)?;
+    let opts = NormalOptions {
+        oriented: a.oriented,
+    };
+    let e = match (&a.gt_cloud, &a.reference) {
+        (Some(g), _) => {
+            let gt = io::read_cloud(g).map_err(CliError::input)?;
+            eval_cloud_normals(&cloud, NormalGroundTruth::SourceSamples(&gt), &opts)
+        }
+        (None, Some(r)) => {
+            let reference = Reference::from_arg(r).map_err(CliError::input)?;
+            eval_cloud_normals(&cloud, NormalGroundTruth::ClosestPoint(&reference), &opts)
+        }
+        (None, None) => {
+            return Err(CliError::input(
+                "eval-normals needs --gt-cloud or --reference",
+            ));
+        }
+    }
+    .map_err(CliError::input)?;
+    print_report(&e, a.json)
+}
+
+/// `reconbench eval-features`.
+pub fn eval_features(a: EvalFeaturesArgs) -> CliResult {
+    let cloud = io::read_cloud(&a.cloud).map_err(CliError::input)?;
+    let reference = Reference::from_arg(&a.reference).map_err(CliError::input)?;
+    let gt = a
+        .gt_cloud
+        .as_ref()
+        .map(io::read_cloud)
+        .transpose()
+        .map_err(CliError::input)?;
+    let clean = match &gt {
+        Some(g) => CleanPositions::SourceSamples(g),
+        None if cloud.channel("clean_x").is_some() => CleanPositions::Channels,
+        None => CleanPositions::Observed,
+    };
+    let opts = FeatureOptions {
+        feature_angle_deg: a.feature_angle,
+        radius_factor: a.radius_factor,
+        ..FeatureOptions::default()
+    };
+    let e = eval_cloud_features(&cloud, &reference, clean, &opts).map_err(CliError::input)?;
+    print_report(&e, a.json)
+}

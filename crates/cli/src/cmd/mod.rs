@@ -1,0 +1,119 @@
+//! Subcommand definitions and dispatch.
+
+mod delaunay;
+mod eval;
+mod harness;
+mod info;
+mod synth;
+
+use std::fmt::Display;
+
+use clap::{Parser, Subcommand};
+
+/// A failure with the exit code the process should return.
+#[derive(Debug)]
+pub struct CliError {
+    /// One-line message for stderr.
+    pub message: String,
+    /// 2 for bad input, 1 for anything else.
+    pub code: u8,
+}
+
+impl CliError {
+    /// Bad input: unreadable/malformed files, invalid parameters (exit code 2).
+    pub fn input(e: impl Display) -> Self {
+        Self {
+            message: one_line(e),
+            code: 2,
+        }
+    }
+
+    /// Any other failure (exit code 1).
+    pub fn failure(e: impl Display) -> Self {
+        Self {
+            message: one_line(e),
+            code: 1,
+        }
+    }
+}
+
+/// Collapses a possibly multi-line message into one line.
+fn one_line(e: impl Display) -> String {
+    e.to_string()
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Result type of the subcommands.
+pub type CliResult = Result<(), CliError>;
+
+/// reconbench: reproducible benchmarks for surface reconstruction from point clouds.
+#[derive(Debug, Parser)]
+#[command(name = "reconbench", version, about, long_about = None, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Print counts and the topology report of a mesh or point cloud file.
+    #[command(after_help = "Example:\n  reconbench info datasets/double_torus.ply --json")]
+    Info(info::InfoArgs),
+    /// Convert between PLY, OBJ, OFF, STL and XYZ/PTS (chosen by extension).
+    #[command(
+        after_help = "Example:\n  reconbench convert bunny.obj bunny.ply --ply-encoding ascii"
+    )]
+    Convert(info::ConvertArgs),
+    /// Generate a ground-truth cloud (positions, GT normals, feature distance, source
+    /// ids) or a reference mesh from a built-in shape.
+    #[command(
+        after_help = "Examples:\n  reconbench gen torus --points 10000 --noise gaussian:sigma=0.002 --seed 1 -o torus.ply\n  reconbench gen double-torus --mesh --resolution 96 -o ref.ply"
+    )]
+    Gen(synth::GenArgs),
+    /// List the built-in shapes with genus and sharp-feature summary.
+    #[command(after_help = "Example:\n  reconbench shapes --json")]
+    Shapes(synth::ShapesArgs),
+    /// Build the 3D Delaunay tetrahedralization of a cloud and print its statistics.
+    #[command(after_help = "Example:\n  reconbench delaunay torus.ply --json")]
+    Delaunay(delaunay::DelaunayArgs),
+    /// Distances, topology and quality of a reconstructed mesh against ground truth.
+    #[command(after_help = "Example:\n  reconbench eval --mesh out.ply --reference torus --json")]
+    Eval(eval::EvalArgs),
+    /// Normal errors of a cloud's normals against ground truth.
+    #[command(
+        after_help = "Example:\n  reconbench eval-normals --cloud est.ply --gt-cloud torus.ply --oriented --json"
+    )]
+    EvalNormals(eval::EvalNormalsArgs),
+    /// Sharp-feature precision/recall/F1 of a labelled cloud against a shape's curves.
+    #[command(
+        after_help = "Example:\n  reconbench eval-features --cloud labels.ply --reference box --gt-cloud box.ply --json"
+    )]
+    EvalFeatures(eval::EvalFeaturesArgs),
+    /// Experiment harness verbs (run, list, reconstruct, normals, features, ...).
+    #[command(flatten)]
+    Harness(harness::HarnessCommand),
+}
+
+/// Runs the parsed command line.
+pub fn run(cli: Cli) -> CliResult {
+    match cli.command {
+        Command::Info(a) => info::info(a),
+        Command::Convert(a) => info::convert(a),
+        Command::Gen(a) => synth::gen_cmd(a),
+        Command::Shapes(a) => synth::shapes_cmd(a),
+        Command::Delaunay(a) => delaunay::delaunay(a),
+        Command::Eval(a) => eval::eval(a),
+        Command::EvalNormals(a) => eval::eval_normals(a),
+        Command::EvalFeatures(a) => eval::eval_features(a),
+        Command::Harness(c) => harness::run(c),
+    }
+}
+
+/// Prints `value` as pretty JSON on stdout.
+pub fn print_json(value: &impl serde::Serialize) -> CliResult {
+    let s = serde_json::to_string_pretty(value).map_err(CliError::failure)?;
+    println!("{s}");
+    Ok(())
+}

@@ -1,0 +1,484 @@
+//! The glue between a cell and the ground-truth and metric crates: data generation,
+//! ground truth for oracles, the method call, and the metrics of its output.
+//!
+//! This is the one module to adapt when `reconbench-synth` or `reconbench-metrics`
+//! change their APIs.
+//!
+//! Data generation goes through `reconbench_synth::generate_for_shape` with a
+//! [`DatasetSpec`] built from the cell's data spec (see [`dataset_spec`]); the
+//! perturbation keys of experiment files map to synth's perturbation kinds
+//! ([`PERTURB_KEYS`]).
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glam::DVec3;
+use reconbench_geom::PointCloud;
+use reconbench_geom::method::{Diagnostic, Diagnostics, FeatureClass, RunCtx};
+use reconbench_metrics::{
+    FeatureOptions, MeshEvalOptions, NormalOptions, Reference, Report, eval_features, eval_mesh,
+    eval_normals,
+};
+use reconbench_synth::{
+    DatasetSpec, Density, NO_FEATURE, PerturbSpec, SamplerSpec, Shape, ShapeSpec,
+};
+use serde_json::Value;
+
+use crate::error::{HarnessError, Result};
+use crate::experiment::{Cell, DataSpec};
+use crate::key::{derive_seed, fnv1a64};
+use crate::registry::{self, Built, GroundTruth, MethodEnv, MethodKind};
+use crate::render::RenderData;
+use crate::store::Dist;
+
+/// Perturbation keys of experiment files, in the order they are applied: the key, the
+/// synth perturbation kind, its main parameter (the value given), and its meaning.
+/// A value of 0 means "not applied" (except for `decimate`). `spec` takes full synth
+/// perturbation specs (`"misalign:groups=4,angle=1,shift=0.01"`), applied after the
+/// others but before outliers.
+pub const PERTURB_KEYS: &[(&str, &str, &str, &str)] = &[
+    (
+        "decimate",
+        "decimate",
+        "keep",
+        "keep this fraction of the points",
+    ),
+    (
+        "duplicate",
+        "duplicate",
+        "fraction",
+        "duplicate this fraction of the points",
+    ),
+    ("holes", "holes", "count", "cut this many holes"),
+    (
+        "ma-uniform",
+        "ma-uniform",
+        "level",
+        "seed 000's noise: U[-level s_p, level s_p] per coordinate",
+    ),
+    (
+        "noise",
+        "ball",
+        "radius",
+        "uniform in a ball of this radius (fraction of the diagonal; seed 002's model)",
+    ),
+    ("ball", "ball", "radius", "same as noise"),
+    (
+        "gaussian",
+        "gaussian",
+        "sigma",
+        "Gaussian noise, this per-axis standard deviation (fraction of the diagonal)",
+    ),
+    (
+        "normal-gaussian",
+        "normal-gaussian",
+        "sigma",
+        "Gaussian displacement along the normal (fraction of the diagonal)",
+    ),
+    (
+        "spec",
+        "",
+        "",
+        "full synth perturbation spec(s), e.g. \"misalign:groups=4,angle=1,shift=0.01\"",
+    ),
+    (
+        "copies",
+        "copies",
+        "fraction",
+        "SCUTSurface outliers: displaced copies of this fraction of the points",
+    ),
+    (
+        "outliers",
+        "outliers",
+        "fraction",
+        "this fraction of extra points, uniform in the inflated bounding box",
+    ),
+];
+
+/// Top-level keys of `[metrics]`.
+pub const METRIC_SECTIONS: &[(&str, &str)] = &[
+    (
+        "mesh",
+        "options of metrics::eval_mesh (distance sampling, topology, quality, features)",
+    ),
+    ("normals", "options of metrics::eval_normals"),
+    (
+        "features",
+        "options of metrics::eval_features (feature angle, radius)",
+    ),
+];
+
+fn list<'a>(items: impl Iterator<Item = &'a str>) -> String {
+    items.collect::<Vec<_>>().join(", ")
+}
+
+/// Checks a perturbation key.
+pub fn validate_perturb_key(k: &str) -> Result<()> {
+    if PERTURB_KEYS.iter().any(|(n, ..)| *n == k) {
+        Ok(())
+    } else {
+        Err(HarnessError::input(format!(
+            "unknown perturbation '{k}'; valid: name, {}",
+            list(PERTURB_KEYS.iter().map(|(n, ..)| *n))
+        )))
+    }
+}
+
+/// The synth perturbation steps of resolved perturbation values, in application order.
+pub fn perturb_specs(p: &BTreeMap<String, Value>) -> Result<Vec<PerturbSpec>> {
+    let mut out = Vec::new();
+    for (key, kind, param, _) in PERTURB_KEYS {
+        let Some(v) = p.get(*key) else { continue };
+        let texts: Vec<String> = if *key == "spec" {
+            match v {
+                Value::String(s) if s.trim().is_empty() => Vec::new(),
+                Value::String(s) => vec![s.clone()],
+                other => {
+                    return Err(HarnessError::input(format!(
+                        "perturbation 'spec': expected a synth perturbation spec string, got {other}"
+                    )));
+                }
+            }
+        } else {
+            let x = v.as_f64().ok_or_else(|| {
+                HarnessError::input(format!("perturbation '{key}': expected a number, got {v}"))
+            })?;
+            if !x.is_finite() || x < 0.0 {
+                return Err(HarnessError::input(format!(
+                    "perturbation '{key}' = {x}: must be a finite number >= 0"
+                )));
+            }
+            if x == 0.0 && *key != "decimate" {
+                Vec::new()
+            } else {
+                vec![format!("{kind}:{param}={x}")]
+            }
+        };
+        for t in texts {
+            let spec: PerturbSpec = t
+                .parse()
+                .map_err(|e| HarnessError::input(format!("perturbation '{key}' ({t}): {e}")))?;
+            out.push(spec);
+        }
+    }
+    Ok(out)
+}
+
+/// Checks resolved perturbation values.
+pub fn validate_perturb_values(p: &BTreeMap<String, Value>) -> Result<()> {
+    perturb_specs(p).map(drop)
+}
+
+/// Checks a dataset's shape and sampler specs.
+pub fn validate_data(shape: &str, sampler: &str) -> Result<()> {
+    reconbench_synth::from_spec(shape)
+        .map_err(|e| HarnessError::input(format!("shape '{shape}': {e}")))?;
+    sampler
+        .parse::<SamplerSpec>()
+        .map_err(|e| HarnessError::input(format!("sampler '{sampler}': {e}")))?;
+    Ok(())
+}
+
+/// The synth dataset spec of a cell's data.
+pub fn dataset_spec(data: &DataSpec) -> Result<DatasetSpec> {
+    let shape: ShapeSpec = data
+        .shape
+        .parse()
+        .map_err(|e| HarnessError::input(format!("shape '{}': {e}", data.shape)))?;
+    let sampler: SamplerSpec = data
+        .sampler
+        .parse()
+        .map_err(|e| HarnessError::input(format!("sampler '{}': {e}", data.sampler)))?;
+    let n = usize::try_from(data.points).map_err(|_| HarnessError::input("too many points"))?;
+    Ok(DatasetSpec {
+        shape,
+        sampler,
+        density: Density::Count(n),
+        perturbations: perturb_specs(&data.perturb)?,
+        scan: None,
+    })
+}
+
+/// Checks `[metrics]` (top-level sections and their option types).
+pub fn validate_metric_options(m: &Value) -> Result<()> {
+    if let Value::Object(map) = m {
+        for k in map.keys() {
+            if !METRIC_SECTIONS.iter().any(|(n, _)| n == k) {
+                return Err(HarnessError::input(format!(
+                    "unknown [metrics] section '{k}'; valid: {}",
+                    list(METRIC_SECTIONS.iter().map(|(n, _)| *n))
+                )));
+            }
+        }
+    }
+    metric_options(m).map(drop)
+}
+
+struct MetricOptions {
+    mesh: MeshEvalOptions,
+    normals: NormalOptions,
+    features: FeatureOptions,
+}
+
+fn section<T: serde::de::DeserializeOwned + Default>(m: &Value, name: &str) -> Result<T> {
+    match m.get(name) {
+        None => Ok(T::default()),
+        Some(v) => serde_json::from_value(v.clone())
+            .map_err(|e| HarnessError::input(format!("[metrics.{name}]: {e}"))),
+    }
+}
+
+fn metric_options(m: &Value) -> Result<MetricOptions> {
+    Ok(MetricOptions {
+        mesh: section(m, "mesh")?,
+        normals: section(m, "normals")?,
+        features: section(m, "features")?,
+    })
+}
+
+/// Default table columns per method kind (the first two are plotted).
+pub fn default_metrics(kind: MethodKind) -> &'static [&'static str] {
+    match kind {
+        MethodKind::Normals => &[
+            "normal_mean_deg",
+            "normal_rms_deg",
+            "normal_pgp5",
+            "normal_pgp10",
+        ],
+        MethodKind::Features => &["feature_f1", "feature_precision", "feature_recall"],
+        MethodKind::Reconstruct => &["chamfer_l1", "hausdorff", "fscore_0.01", "topology_ok"],
+    }
+}
+
+/// Whether larger values of `metric` are better (for bold table entries and
+/// regression directions).
+pub fn higher_is_better(metric: &str) -> bool {
+    const UP: &[&str] = &[
+        "pgp",
+        "fscore",
+        "precision",
+        "recall",
+        "f1",
+        "coverage",
+        "recovery",
+        "_ok",
+        "watertight",
+        "orientable",
+        "min_angle",
+        "matching",
+    ];
+    UP.iter().any(|u| metric.contains(u))
+}
+
+/// The generated input of a cell and its ground truth.
+#[derive(Debug, Clone)]
+pub struct Generated {
+    /// The cloud methods see: positions only.
+    pub input: PointCloud,
+    /// Ground truth (handed to oracles and to the metrics).
+    pub gt: GroundTruth,
+    /// Per input point: the clean position it came from (outliers: their own).
+    pub clean: Vec<DVec3>,
+    /// Per input point: whether it is an added outlier.
+    pub is_outlier: Vec<bool>,
+}
+
+/// Generates the input of a cell with synth (see the module docs).
+pub fn generate(data: &DataSpec, shape: Arc<dyn Shape>, seed: u64) -> Result<Generated> {
+    let spec = dataset_spec(data)?;
+    let g = reconbench_synth::generate_for_shape(shape.as_ref(), &spec, seed)
+        .map_err(|e| HarnessError::failure(format!("data generation: {e}")))?;
+    let input = PointCloud::new(g.positions).map_err(|e| HarnessError::failure(e.to_string()))?;
+    let feature_distance = g
+        .feature_distance
+        .iter()
+        .map(|&d| if d == NO_FEATURE { f64::INFINITY } else { d })
+        .collect();
+    Ok(Generated {
+        input,
+        gt: GroundTruth {
+            shape: Some(shape),
+            normals: Some(g.normals),
+            feature_distance: Some(feature_distance),
+        },
+        clean: g.clean_positions,
+        is_outlier: g.is_outlier,
+    })
+}
+
+/// What a cell produced.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    /// Metrics by stable key.
+    pub metrics: BTreeMap<String, f64>,
+    /// Method diagnostics.
+    pub diagnostics: BTreeMap<String, Value>,
+    /// Per-point error distribution.
+    pub dist: Option<Dist>,
+    /// Method phases.
+    pub phases: Vec<(String, f64)>,
+    /// Data generation time.
+    pub generate_s: f64,
+    /// Method time.
+    pub method_s: f64,
+    /// Metric time.
+    pub metrics_s: f64,
+    /// Mesh and per-vertex error, for reconstructions.
+    pub render: Option<RenderData>,
+}
+
+pub(crate) fn diagnostics_json(d: &Diagnostics) -> BTreeMap<String, Value> {
+    d.iter()
+        .map(|(k, v)| {
+            let j = match v {
+                Diagnostic::Number(x) => {
+                    serde_json::Number::from_f64(*x).map_or(Value::Null, Value::Number)
+                }
+                Diagnostic::Series(s) => Value::Array(
+                    s.iter()
+                        .map(|x| {
+                            serde_json::Number::from_f64(*x).map_or(Value::Null, Value::Number)
+                        })
+                        .collect(),
+                ),
+                Diagnostic::Text(t) => Value::String(t.clone()),
+            };
+            (k.clone(), j)
+        })
+        .collect()
+}
+
+/// Keeps deterministic numeric entries (timings of the evaluation itself are cost, not
+/// metrics, and are left out so that rows compare byte for byte).
+fn keep_metrics(row: BTreeMap<String, f64>) -> BTreeMap<String, f64> {
+    row.into_iter()
+        .filter(|(k, v)| {
+            v.is_finite() && !k.starts_with("eval_") && !k.ends_with("_s") && !k.contains("time")
+        })
+        .collect()
+}
+
+/// Runs one cell in this process: generate, run the method, evaluate. Errors are the
+/// reasons recorded in the row (status `error`).
+pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, String> {
+    let spec = &cell.spec;
+    let entry = registry::find(&spec.method).map_err(|e| e.to_string())?;
+    let shape: Arc<dyn Shape> = Arc::from(
+        reconbench_synth::from_spec(&spec.data.shape).map_err(|e| format!("shape: {e}"))?,
+    );
+    let t = Instant::now();
+    let data =
+        generate(&spec.data, shape.clone(), cell.data_seed).map_err(|e| format!("data: {e}"))?;
+    let generate_s = t.elapsed().as_secs_f64();
+    let gt = Arc::new(data.gt.clone());
+    let env = MethodEnv {
+        ground_truth: Some(gt.clone()),
+    };
+    let built = entry
+        .build(&spec.params, &env)
+        .map_err(|e| format!("method: {e}"))?;
+    let opts = metric_options(&spec.metrics).map_err(|e| e.to_string())?;
+    let method_seed = derive_seed(&[cell.data_seed, fnv1a64(spec.method.as_bytes())]);
+    let mut ctx = RunCtx::new(method_seed).with_budget(budget);
+    let reference = Reference::analytic(shape.as_ref());
+    let diag = shape.aabb().diagonal();
+    let mut out = Outcome {
+        metrics: BTreeMap::new(),
+        diagnostics: BTreeMap::new(),
+        dist: None,
+        phases: Vec::new(),
+        generate_s,
+        method_s: 0.0,
+        metrics_s: 0.0,
+        render: None,
+    };
+    match built {
+        Built::Normals(m) => {
+            let t = Instant::now();
+            let r = m
+                .estimate(&data.input, &mut ctx)
+                .map_err(|e| format!("method: {e}"))?;
+            out.method_s = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let gt_n = gt.normals.as_deref().unwrap_or(&[]);
+            let mut o = opts.normals.clone();
+            o.oriented = o.oriented || r.oriented;
+            let ev = eval_normals(&r.normals, gt_n, &o).map_err(|e| format!("metrics: {e}"))?;
+            out.metrics = keep_metrics(ev.to_row());
+            out.dist = Dist::of("normal angle (deg)", &ev.per_point_deg);
+            out.metrics_s = t.elapsed().as_secs_f64();
+            out.diagnostics = diagnostics_json(&r.diagnostics);
+        }
+        Built::Features(m) => {
+            let t = Instant::now();
+            let r = m
+                .detect(&data.input, &mut ctx)
+                .map_err(|e| format!("method: {e}"))?;
+            out.method_s = t.elapsed().as_secs_f64();
+            if r.labels.len() != data.input.len() {
+                return Err(format!(
+                    "method: {} labels for {} points",
+                    r.labels.len(),
+                    data.input.len()
+                ));
+            }
+            let t = Instant::now();
+            let detected: Vec<bool> = r.labels.iter().map(|&c| c != FeatureClass::None).collect();
+            let curves = reference.feature_curves(opts.features.feature_angle_deg);
+            let ev = eval_features(
+                data.input.positions(),
+                &data.clean,
+                &detected,
+                &curves,
+                diag,
+                &opts.features,
+            )
+            .map_err(|e| format!("metrics: {e}"))?;
+            out.metrics = keep_metrics(ev.to_row());
+            let fd = gt.feature_distance.as_deref().unwrap_or(&[]);
+            let d: Vec<f64> = fd
+                .iter()
+                .zip(&detected)
+                .filter(|(_, d)| **d)
+                .map(|(x, _)| *x / diag)
+                .collect();
+            out.dist = Dist::of("feature distance (diag)", &d);
+            out.metrics_s = t.elapsed().as_secs_f64();
+            out.diagnostics = diagnostics_json(&r.diagnostics);
+        }
+        Built::Reconstruct(m) => {
+            let t = Instant::now();
+            let r = m
+                .reconstruct(&data.input, &mut ctx)
+                .map_err(|e| format!("method: {e}"))?;
+            out.method_s = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let mut o = opts.mesh.clone();
+            o.distance.vertex_error = true;
+            let ev = eval_mesh(&r.mesh, &reference, &o).map_err(|e| format!("metrics: {e}"))?;
+            out.metrics = keep_metrics(ev.to_row());
+            out.metrics.insert("refused".into(), r.refused.len() as f64);
+            let verr: Vec<f64> = match &ev.distance.vertex_error {
+                Some(v) if v.len() == r.mesh.n_vertices() => v.iter().map(|x| x / diag).collect(),
+                _ => r
+                    .mesh
+                    .vertices()
+                    .iter()
+                    .map(|&p| shape.distance(p) / diag)
+                    .collect(),
+            };
+            out.dist = Dist::of("vertex distance (diag)", &verr);
+            out.metrics_s = t.elapsed().as_secs_f64();
+            out.diagnostics = diagnostics_json(&r.diagnostics);
+            out.render = Some(RenderData {
+                vertices: r.mesh.vertices().to_vec(),
+                faces: r.mesh.faces().to_vec(),
+                values: verr,
+                title: "distance / diag".into(),
+            });
+        }
+    }
+    out.phases = ctx.timer.phases.clone();
+    Ok(out)
+}

@@ -1,0 +1,724 @@
+//! Experiment files (TOML) and their expansion into a grid of cells.
+//!
+//! The reference for the format is `experiments/README.md`. In short:
+//!
+//! ```toml
+//! name = "quickstart"        # default: the file stem; results go to results/<name>/
+//! seed = 1                   # experiment seed
+//! seeds = 3                  # seed indices 0..3 (or a list: [0, 4, 7])
+//! timeout = 60               # per-cell seconds
+//!
+//! [[datasets]]
+//! shape = "torus:R=0.5,r=0.2"
+//! sampler = "uniform"
+//! points = [2000, 4000]      # lists expand
+//!
+//! [[perturbations]]
+//! noise = [0.0, 0.0025, 0.005]   # lists expand (Cartesian product within a block)
+//!
+//! [[methods]]
+//! name = "reference-mesh"
+//! params = { resolution = [32, 64] }   # lists expand
+//!
+//! [metrics]                  # options for the metric functions
+//! [report]                   # tables, plots, renders
+//! [[expect]]                 # published figures to compare with
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
+
+use crate::cell;
+use crate::error::{HarnessError, Result};
+use crate::key::{derive_seed, hash_value, hex_key};
+use crate::registry::{self, MethodKind};
+
+/// Seed indices: a count (`3` = 0, 1, 2) or an explicit list.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Seeds {
+    /// `0..n`.
+    Count(u32),
+    /// Explicit indices.
+    List(Vec<u32>),
+}
+
+impl Default for Seeds {
+    fn default() -> Self {
+        Seeds::Count(1)
+    }
+}
+
+impl Seeds {
+    /// The indices.
+    pub fn indices(&self) -> Vec<u32> {
+        match self {
+            Seeds::Count(n) => (0..*n).collect(),
+            Seeds::List(v) => v.clone(),
+        }
+    }
+}
+
+/// One `[[datasets]]` entry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetEntry {
+    /// Label in tables and plots (default: the shape spec).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Shape spec, e.g. `torus:R=0.5,r=0.2` (see `reconbench shapes`).
+    pub shape: String,
+    /// Sampler spec (default `uniform`).
+    #[serde(default = "default_sampler")]
+    pub sampler: String,
+    /// Number of points; a list expands.
+    pub points: toml::Value,
+}
+
+fn default_sampler() -> String {
+    "uniform".into()
+}
+
+/// One `[[methods]]` entry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MethodSpec {
+    /// Registry name.
+    pub name: String,
+    /// Label in tables (default: the name, plus the swept parameters).
+    #[serde(default)]
+    pub label: Option<String>,
+    /// Parameters; list values expand (wrap a list-valued parameter in a list: `[[1, 2]]`).
+    #[serde(default)]
+    pub params: toml::Table,
+}
+
+/// `[report]` options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ReportOptions {
+    /// Perturbation key on the x axis of metric plots (default: the first swept key).
+    pub x: Option<String>,
+    /// Metric columns of the tables (default: a standard set per method kind).
+    pub metrics: Vec<String>,
+    /// Metrics plotted against `x` (default: the first two columns per kind).
+    pub plot_metrics: Vec<String>,
+    /// Table formats among `md`, `tex`, `csv`.
+    pub tables: Vec<String>,
+    /// Write plots.
+    pub plots: bool,
+    /// Write error renders of reconstructions (seed index 0 of each configuration).
+    pub renders: bool,
+    /// Top of the fixed colour scale of renders (fraction of the diagonal).
+    pub render_max: f64,
+    /// Height in pixels of each render view.
+    pub render_size: u32,
+    /// Plot size in pixels `[width, height]`.
+    pub plot_size: [u32; 2],
+}
+
+impl Default for ReportOptions {
+    fn default() -> Self {
+        Self {
+            x: None,
+            metrics: Vec::new(),
+            plot_metrics: Vec::new(),
+            tables: vec!["md".into(), "tex".into(), "csv".into()],
+            plots: true,
+            renders: true,
+            render_max: 0.01,
+            render_size: 240,
+            plot_size: [800, 500],
+        }
+    }
+}
+
+/// An `[[expect]]` entry: a published figure to reproduce.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Expect {
+    /// Cell selector: `dataset`, `method` (label or name), `shape`, `points`, any
+    /// perturbation key, or `params.NAME`; every given key must match.
+    #[serde(rename = "where", default)]
+    pub select: toml::Table,
+    /// Metric name (as in the tables, e.g. `normals.angle_mean_deg`).
+    pub metric: String,
+    /// The published value.
+    pub value: f64,
+    /// Where it is published, e.g. `seed 000 Table 4.1`.
+    #[serde(default)]
+    pub source: String,
+    /// Tolerance: `rel:0.05` (default) or `abs:0.001`.
+    #[serde(default = "default_expect_tol")]
+    pub tol: String,
+}
+
+fn default_expect_tol() -> String {
+    "rel:0.05".into()
+}
+
+/// The TOML file as written.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentFile {
+    /// Name (default: file stem).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Free text for the report.
+    #[serde(default)]
+    pub description: String,
+    /// Experiment seed.
+    #[serde(default)]
+    pub seed: u64,
+    /// Seed indices.
+    #[serde(default)]
+    pub seeds: Seeds,
+    /// Per-cell timeout in seconds (default 600).
+    #[serde(default)]
+    pub timeout: Option<f64>,
+    /// Per-cell resident-memory limit in MiB (default: none).
+    #[serde(default)]
+    pub memory_limit_mib: Option<u64>,
+    /// Datasets.
+    #[serde(default)]
+    pub datasets: Vec<DatasetEntry>,
+    /// Perturbation blocks (default: one block without perturbation).
+    #[serde(default)]
+    pub perturbations: Vec<toml::Table>,
+    /// Methods.
+    #[serde(default)]
+    pub methods: Vec<MethodSpec>,
+    /// Metric options, passed to the metric functions.
+    #[serde(default)]
+    pub metrics: toml::Table,
+    /// Report options.
+    #[serde(default)]
+    pub report: ReportOptions,
+    /// Published figures.
+    #[serde(default)]
+    pub expect: Vec<Expect>,
+}
+
+/// The data a cell's input cloud is generated from (shared by every method of a cell).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DataSpec {
+    /// Shape spec.
+    pub shape: String,
+    /// Sampler spec.
+    pub sampler: String,
+    /// Number of points.
+    pub points: u64,
+    /// Perturbation settings (resolved scalars, sorted by key).
+    pub perturb: BTreeMap<String, Value>,
+}
+
+/// Everything a worker needs to run one cell. Its canonical JSON (minus labels) is hashed
+/// into the cell key.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CellSpec {
+    /// The input data.
+    pub data: DataSpec,
+    /// Method registry name.
+    pub method: String,
+    /// Method kind.
+    pub kind: MethodKind,
+    /// Resolved parameters (defaults filled in).
+    pub params: Value,
+    /// Experiment seed.
+    pub experiment_seed: u64,
+    /// Seed index (repetition).
+    pub seed_index: u32,
+    /// Metric options.
+    pub metrics: Value,
+}
+
+/// Human-readable labels of a cell (not part of its key).
+#[derive(Debug, Clone, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct Labels {
+    /// Dataset label.
+    pub dataset: String,
+    /// Perturbation label (`clean` when none).
+    pub perturb: String,
+    /// Method label.
+    pub method: String,
+}
+
+/// One cell of the expanded grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Cell {
+    /// Position in the grid (stable for a given file).
+    pub index: usize,
+    /// Stable key: hash of the spec and the harness version.
+    pub key: String,
+    /// Key of the configuration (the spec without its seed index): groups repetitions.
+    pub config: String,
+    /// Seed of the input data, from (experiment seed, data spec, seed index).
+    pub data_seed: u64,
+    /// Labels.
+    pub labels: Labels,
+    /// The spec.
+    pub spec: CellSpec,
+}
+
+/// A loaded and validated experiment.
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// Name.
+    pub name: String,
+    /// Where it was read from.
+    pub path: Option<PathBuf>,
+    /// The file.
+    pub file: ExperimentFile,
+    /// Per-cell timeout, seconds.
+    pub timeout_s: f64,
+    /// The expanded grid.
+    pub cells: Vec<Cell>,
+    /// Perturbation keys that take more than one value (plot axes).
+    pub swept: Vec<String>,
+}
+
+/// Salt of every key: changes when the harness version changes.
+pub fn key_salt() -> String {
+    format!("reconbench-harness/{}", env!("CARGO_PKG_VERSION"))
+}
+
+impl Experiment {
+    /// Reads and expands an experiment file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = crate::error::read_to_string(path)?;
+        let stem = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("experiment")
+            .to_string();
+        let mut exp = Self::parse(&text, &stem)
+            .map_err(|e| HarnessError::input(format!("{}: {e}", path.display())))?;
+        exp.path = Some(path.to_path_buf());
+        Ok(exp)
+    }
+
+    /// Parses and expands experiment text; `default_name` is used when it has no name.
+    pub fn parse(text: &str, default_name: &str) -> Result<Self> {
+        let file: ExperimentFile =
+            toml::from_str(text).map_err(|e| HarnessError::input(e.to_string()))?;
+        let name = file
+            .name
+            .clone()
+            .unwrap_or_else(|| default_name.to_string());
+        if name.is_empty()
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.')
+        {
+            return Err(HarnessError::input(format!(
+                "experiment name '{name}' must be non-empty and use only letters, digits, '-', '_', '.'"
+            )));
+        }
+        let timeout_s = file.timeout.unwrap_or(600.0);
+        if !(timeout_s.is_finite() && timeout_s > 0.0) {
+            return Err(HarnessError::input(format!(
+                "timeout must be > 0 seconds, got {timeout_s}"
+            )));
+        }
+        let (cells, swept) = expand(&file)?;
+        validate_report(&file.report, &swept)?;
+        Ok(Self {
+            name,
+            path: None,
+            file,
+            timeout_s,
+            cells,
+            swept,
+        })
+    }
+}
+
+fn validate_report(r: &ReportOptions, swept: &[String]) -> Result<()> {
+    for t in &r.tables {
+        if !["md", "tex", "csv"].contains(&t.as_str()) {
+            return Err(HarnessError::input(format!(
+                "report.tables: unknown format '{t}'; valid: md, tex, csv"
+            )));
+        }
+    }
+    if let Some(x) = &r.x {
+        if !swept.contains(x) && x != "points" {
+            return Err(HarnessError::input(format!(
+                "report.x = '{x}' is not a swept perturbation key; swept: {}",
+                if swept.is_empty() {
+                    "(none)".to_string()
+                } else {
+                    swept.join(", ")
+                }
+            )));
+        }
+    }
+    if !(r.render_max.is_finite() && r.render_max > 0.0) {
+        return Err(HarnessError::input("report.render_max must be > 0"));
+    }
+    if r.render_size < 16
+        || r.render_size > 4096
+        || r.plot_size.iter().any(|&s| !(64..=8192).contains(&s))
+    {
+        return Err(HarnessError::input(
+            "report: render_size must be in 16..=4096, plot_size in 64..=8192",
+        ));
+    }
+    Ok(())
+}
+
+/// Expands list values of a table into the Cartesian product of scalar tables (keys
+/// sorted; the last key varies fastest). Returns the combinations and the keys that had
+/// lists of more than one value.
+pub fn expand_table(table: &Map<String, Value>) -> (Vec<Map<String, Value>>, Vec<String>) {
+    let mut combos = vec![Map::new()];
+    let mut swept = Vec::new();
+    let mut keys: Vec<&String> = table.keys().collect();
+    keys.sort();
+    for k in keys {
+        let values: Vec<Value> = match &table[k] {
+            Value::Array(items) => items.clone(),
+            v => vec![v.clone()],
+        };
+        if values.len() > 1 {
+            swept.push(k.clone());
+        }
+        let mut next = Vec::with_capacity(combos.len() * values.len());
+        for c in &combos {
+            for v in &values {
+                let mut c = c.clone();
+                c.insert(k.clone(), v.clone());
+                next.push(c);
+            }
+        }
+        combos = next;
+    }
+    (combos, swept)
+}
+
+fn to_json(t: &toml::Table) -> Map<String, Value> {
+    match serde_json::to_value(t) {
+        Ok(Value::Object(m)) => m,
+        _ => Map::new(),
+    }
+}
+
+fn fmt_value(v: &Value) -> String {
+    match v {
+        Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
+    if file.datasets.is_empty() {
+        return Err(HarnessError::input("no [[datasets]]: add at least one"));
+    }
+    if file.methods.is_empty() {
+        return Err(HarnessError::input("no [[methods]]: add at least one"));
+    }
+    let seeds = file.seeds.indices();
+    if seeds.is_empty() {
+        return Err(HarnessError::input("seeds: need at least one seed index"));
+    }
+    let metrics = Value::Object(to_json(&file.metrics));
+    cell::validate_metric_options(&metrics)?;
+
+    // Datasets x points.
+    let mut datasets = Vec::new();
+    for (i, d) in file.datasets.iter().enumerate() {
+        cell::validate_data(&d.shape, &d.sampler)
+            .map_err(|e| HarnessError::input(format!("datasets[{i}]: {e}")))?;
+        let points: Vec<u64> = match &d.points {
+            toml::Value::Integer(n) => vec![*n as u64],
+            toml::Value::Array(a) => a
+                .iter()
+                .map(|v| v.as_integer().filter(|&n| n > 0).map(|n| n as u64))
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| {
+                    HarnessError::input(format!("datasets[{i}].points: expected positive integers"))
+                })?,
+            other => {
+                return Err(HarnessError::input(format!(
+                    "datasets[{i}].points: expected an integer or a list, got {other}"
+                )));
+            }
+        };
+        if points.is_empty() || points.contains(&0) {
+            return Err(HarnessError::input(format!(
+                "datasets[{i}].points: need positive counts"
+            )));
+        }
+        let label = d.name.clone().unwrap_or_else(|| d.shape.clone());
+        for &p in &points {
+            let label = if points.len() > 1 {
+                format!("{label} n={p}")
+            } else {
+                label.clone()
+            };
+            datasets.push((label, d.shape.clone(), d.sampler.clone(), p));
+        }
+    }
+
+    // Perturbation blocks.
+    let blocks: Vec<toml::Table> = if file.perturbations.is_empty() {
+        vec![toml::Table::new()]
+    } else {
+        file.perturbations.clone()
+    };
+    let mut perturbs: Vec<(String, BTreeMap<String, Value>)> = Vec::new();
+    let mut swept_all: Vec<String> = Vec::new();
+    for (i, b) in blocks.iter().enumerate() {
+        let mut m = to_json(b);
+        let name = match m.remove("name") {
+            Some(Value::String(s)) => Some(s),
+            Some(other) => {
+                return Err(HarnessError::input(format!(
+                    "perturbations[{i}].name: expected a string, got {other}"
+                )));
+            }
+            None => None,
+        };
+        for k in m.keys() {
+            cell::validate_perturb_key(k)
+                .map_err(|e| HarnessError::input(format!("perturbations[{i}]: {e}")))?;
+        }
+        let (combos, swept) = expand_table(&m);
+        for s in &swept {
+            if !swept_all.contains(s) {
+                swept_all.push(s.clone());
+            }
+        }
+        for c in combos {
+            let parts: Vec<String> = c
+                .iter()
+                .filter(|(k, _)| swept.contains(k) || name.is_none())
+                .map(|(k, v)| format!("{k}={}", fmt_value(v)))
+                .collect();
+            let label = match (&name, parts.is_empty()) {
+                (Some(n), true) => n.clone(),
+                (Some(n), false) => format!("{n} {}", parts.join(" ")),
+                (None, true) => "clean".to_string(),
+                (None, false) => parts.join(" "),
+            };
+            let map: BTreeMap<String, Value> = c.into_iter().collect();
+            cell::validate_perturb_values(&map)
+                .map_err(|e| HarnessError::input(format!("perturbations[{i}]: {e}")))?;
+            perturbs.push((label, map));
+        }
+    }
+
+    // Methods x params.
+    let mut methods = Vec::new();
+    for (i, m) in file.methods.iter().enumerate() {
+        let entry = registry::find(&m.name)
+            .map_err(|e| HarnessError::input(format!("methods[{i}]: {e}")))?;
+        let (combos, swept) = expand_table(&to_json(&m.params));
+        for c in combos {
+            let resolved = entry
+                .resolve_params(&Value::Object(c.clone()))
+                .map_err(|e| HarnessError::input(format!("methods[{i}]: {e}")))?;
+            let base = m.label.clone().unwrap_or_else(|| m.name.clone());
+            let suffix: Vec<String> = swept
+                .iter()
+                .map(|k| format!("{k}={}", fmt_value(&c[k])))
+                .collect();
+            let label = if suffix.is_empty() {
+                base
+            } else {
+                format!("{base} {}", suffix.join(" "))
+            };
+            methods.push((label, entry, resolved));
+        }
+    }
+
+    let salt = key_salt();
+    let mut cells = Vec::new();
+    for (dlabel, shape, sampler, points) in &datasets {
+        for (plabel, perturb) in &perturbs {
+            let data = DataSpec {
+                shape: shape.clone(),
+                sampler: sampler.clone(),
+                points: *points,
+                perturb: perturb.clone(),
+            };
+            let data_hash = hash_value(&salt, &serde_json::to_value(&data).unwrap_or(Value::Null));
+            for (mlabel, entry, params) in &methods {
+                for &s in &seeds {
+                    let spec = CellSpec {
+                        data: data.clone(),
+                        method: entry.name.to_string(),
+                        kind: entry.kind,
+                        params: params.clone(),
+                        experiment_seed: file.seed,
+                        seed_index: s,
+                        metrics: metrics.clone(),
+                    };
+                    let v = serde_json::to_value(&spec).unwrap_or(Value::Null);
+                    let key = hex_key(hash_value(&salt, &v));
+                    let mut cv = v;
+                    if let Value::Object(o) = &mut cv {
+                        o.remove("seed_index");
+                    }
+                    let config = hex_key(hash_value(&salt, &cv));
+                    cells.push(Cell {
+                        index: cells.len(),
+                        key,
+                        config,
+                        data_seed: derive_seed(&[file.seed, data_hash, u64::from(s)]),
+                        labels: Labels {
+                            dataset: dlabel.clone(),
+                            perturb: plabel.clone(),
+                            method: mlabel.clone(),
+                        },
+                        spec,
+                    });
+                }
+            }
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    for c in &cells {
+        if !seen.insert(&c.key) {
+            return Err(HarnessError::input(format!(
+                "two cells resolve to the same spec ({} / {} / {} seed {}): remove the duplicate",
+                c.labels.dataset, c.labels.perturb, c.labels.method, c.spec.seed_index
+            )));
+        }
+    }
+    Ok((cells, swept_all))
+}
+
+/// Parses a `--shard i/N` (0-based `i < N`).
+pub fn parse_shard(s: &str) -> Result<(usize, usize)> {
+    let bad = || HarnessError::input(format!("--shard '{s}': expected i/N with 0 <= i < N"));
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let i: usize = i.trim().parse().map_err(|_| bad())?;
+    let n: usize = n.trim().parse().map_err(|_| bad())?;
+    if n == 0 || i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
+}
+
+/// The cells of shard `i` of `n`: every `n`-th cell starting at `i` (round robin over the
+/// grid order, so expensive methods spread evenly).
+pub fn shard_cells(cells: &[Cell], shard: Option<(usize, usize)>) -> Vec<Cell> {
+    match shard {
+        None => cells.to_vec(),
+        Some((i, n)) => cells.iter().filter(|c| c.index % n == i).cloned().collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SMALL: &str = r#"
+        seed = 7
+        seeds = 2
+        [[datasets]]
+        shape = "sphere"
+        points = [100, 200]
+        [[perturbations]]
+        noise = [0.0, 0.01]
+        [[methods]]
+        name = "gt-normals"
+        [[methods]]
+        name = "reference-mesh"
+        params = { resolution = [8, 16] }
+    "#;
+
+    #[test]
+    fn grid_expands_every_list() {
+        let e = Experiment::parse(SMALL, "small").unwrap();
+        // 2 sizes x 2 noise x (1 + 2) method configs x 2 seeds
+        assert_eq!(e.cells.len(), 2 * 2 * 3 * 2);
+        assert_eq!(e.swept, vec!["noise".to_string()]);
+        let labels: std::collections::BTreeSet<_> =
+            e.cells.iter().map(|c| c.labels.method.clone()).collect();
+        assert!(labels.contains("reference-mesh resolution=8"), "{labels:?}");
+        assert_eq!(e.cells[0].labels.perturb, "noise=0.0");
+        // Indices are positions, seeds vary fastest.
+        assert!(e.cells.iter().enumerate().all(|(i, c)| c.index == i));
+        assert_eq!(e.cells[0].spec.seed_index, 0);
+        assert_eq!(e.cells[1].spec.seed_index, 1);
+        assert_eq!(e.cells[0].config, e.cells[1].config);
+        assert_ne!(e.cells[0].key, e.cells[1].key);
+        // All methods of one data configuration see the same data seed.
+        assert_eq!(e.cells[0].data_seed, e.cells[2].data_seed);
+        assert_ne!(e.cells[0].data_seed, e.cells[1].data_seed);
+    }
+
+    #[test]
+    fn keys_are_stable_and_ignore_order_and_labels() {
+        let a = Experiment::parse(SMALL, "small").unwrap();
+        let reordered = r#"
+            seeds = 2
+            seed = 7
+            [[methods]]
+            params = { resolution = [8, 16] }
+            name = "reference-mesh"
+            label = "renamed"
+            [[datasets]]
+            points = [100, 200]
+            shape = "sphere"
+            name = "ball"
+            [[perturbations]]
+            noise = [0.0, 0.01]
+        "#;
+        let b = Experiment::parse(reordered, "other").unwrap();
+        let ka: std::collections::BTreeSet<_> = a.cells.iter().map(|c| c.key.clone()).collect();
+        for c in &b.cells {
+            assert!(ka.contains(&c.key), "{:?}", c.labels);
+        }
+        // Frozen key: if this changes, every stored result is invalidated. Update it
+        // only together with the harness version.
+        let first = &a.cells[0];
+        assert_eq!(first.key.len(), 16);
+        assert_eq!(
+            first.key,
+            hex_key(hash_value(
+                &key_salt(),
+                &serde_json::to_value(&first.spec).unwrap()
+            ))
+        );
+    }
+
+    #[test]
+    fn unknown_keys_and_methods_list_the_valid_ones() {
+        let err = Experiment::parse("seedz = 1", "x").unwrap_err().to_string();
+        assert!(err.contains("seedz") && err.contains("seeds"), "{err}");
+        let bad_method = SMALL.replace("gt-normals", "gt-normalz");
+        let err = Experiment::parse(&bad_method, "x").unwrap_err().to_string();
+        assert!(
+            err.contains("gt-normalz") && err.contains("gt-normals"),
+            "{err}"
+        );
+        let bad_param = SMALL.replace("resolution = [8, 16]", "resolutoin = 8");
+        let err = Experiment::parse(&bad_param, "x").unwrap_err().to_string();
+        assert!(
+            err.contains("resolutoin") && err.contains("resolution"),
+            "{err}"
+        );
+        let bad_report = format!("{SMALL}\n[report]\ntabels = [\"md\"]\n");
+        let err = Experiment::parse(&bad_report, "x").unwrap_err().to_string();
+        assert!(err.contains("tabels") && err.contains("tables"), "{err}");
+    }
+
+    #[test]
+    fn shards_partition_the_grid() {
+        let e = Experiment::parse(SMALL, "small").unwrap();
+        let mut all: Vec<usize> = (0..3)
+            .flat_map(|i| shard_cells(&e.cells, Some((i, 3))))
+            .map(|c| c.index)
+            .collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..e.cells.len()).collect::<Vec<_>>());
+        assert!(parse_shard("3/3").is_err());
+        assert_eq!(parse_shard("1/4").unwrap(), (1, 4));
+    }
+}

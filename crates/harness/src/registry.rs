@@ -1,0 +1,489 @@
+//! The method registry: every normal estimator, feature detector and reconstructor by a
+//! stable kebab-case name, with typed parameters (serde defaults, documented units).
+//!
+//! Adding a method is one entry in [`entries`]: a name, the seed section it implements,
+//! a summary, its parameter docs and a constructor from its typed `Params`:
+//!
+//! ```ignore
+//! normals::<PcaParams>("pca", "seed 002 §3.1", "PCA plane fit", PCA_DOCS,
+//!     |p, _env| Ok(Box::new(Pca::new(p)))),
+//! ```
+//!
+//! `Params` types derive `Deserialize` with `#[serde(default, deny_unknown_fields)]` and
+//! `Default`, so unknown keys are errors listing the valid ones and `list` can show the
+//! defaults.
+
+use std::sync::{Arc, OnceLock};
+
+use glam::DVec3;
+use reconbench_geom::method::{FeatureDetector, MethodError, NormalEstimator, Reconstructor};
+use reconbench_synth::Shape;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::error::{HarnessError, Result};
+
+/// What a method produces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MethodKind {
+    /// A [`NormalEstimator`].
+    Normals,
+    /// A [`FeatureDetector`].
+    Features,
+    /// A [`Reconstructor`].
+    Reconstruct,
+}
+
+impl MethodKind {
+    /// Stable lower-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MethodKind::Normals => "normals",
+            MethodKind::Features => "features",
+            MethodKind::Reconstruct => "reconstruct",
+        }
+    }
+}
+
+impl std::fmt::Display for MethodKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Documentation of one parameter (its default comes from the `Params` type).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct ParamDoc {
+    /// Name as written in experiment files and `--set`.
+    pub name: &'static str,
+    /// Unit: `"diag"` (fraction of the bounding-box diagonal), `"spacing"`, `"deg"`,
+    /// `"s"`, `"count"`, `"MiB"`, `""` for dimensionless.
+    pub unit: &'static str,
+    /// One sentence.
+    pub doc: &'static str,
+}
+
+/// Ground truth a cell can hand to oracle methods.
+///
+/// Honesty rule: only methods registered with `needs_ground_truth = true` (the oracles,
+/// shown as such in `list`) ever receive it; every other method gets `None` and sees
+/// only the input positions.
+#[derive(Debug, Clone, Default)]
+pub struct GroundTruth {
+    /// The analytic shape the cloud was sampled from.
+    pub shape: Option<Arc<dyn Shape>>,
+    /// Per input point: the clean surface normal at the sample it came from.
+    pub normals: Option<Vec<DVec3>>,
+    /// Per input point: distance of its clean position to the nearest sharp feature, as
+    /// `reconbench-synth` computes it, absolute (synthetic shapes have unit diagonal);
+    /// infinite for outliers and shapes without features.
+    pub feature_distance: Option<Vec<f64>>,
+}
+
+/// What a constructor receives besides its parameters.
+#[derive(Debug, Clone, Default)]
+pub struct MethodEnv {
+    /// Ground truth, for oracles only (see [`GroundTruth`]).
+    pub ground_truth: Option<Arc<GroundTruth>>,
+}
+
+/// A constructed method.
+#[derive(Debug)]
+pub enum Built {
+    /// A normal estimator.
+    Normals(Box<dyn NormalEstimator>),
+    /// A feature detector.
+    Features(Box<dyn FeatureDetector>),
+    /// A reconstructor.
+    Reconstruct(Box<dyn Reconstructor>),
+}
+
+type BuildFn = Arc<dyn Fn(&Value, &MethodEnv) -> Result<Built, MethodError> + Send + Sync>;
+type DefaultsFn = Arc<dyn Fn() -> Value + Send + Sync>;
+
+/// One registered method.
+#[derive(Clone)]
+pub struct MethodEntry {
+    /// Stable kebab-case name.
+    pub name: &'static str,
+    /// What it produces.
+    pub kind: MethodKind,
+    /// Seed section it implements (e.g. `"seed 001 §3.2"`), or `"oracle"`, `"debug"`.
+    pub seed: &'static str,
+    /// One-line summary.
+    pub summary: &'static str,
+    /// Parameter docs.
+    pub params: &'static [ParamDoc],
+    /// Whether it receives ground truth (oracles only).
+    pub needs_ground_truth: bool,
+    /// Hidden from `list` unless `--all` (test-only `debug-*` methods).
+    pub hidden: bool,
+    defaults: DefaultsFn,
+    build: BuildFn,
+}
+
+impl std::fmt::Debug for MethodEntry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MethodEntry")
+            .field("name", &self.name)
+            .field("kind", &self.kind)
+            .field("seed", &self.seed)
+            .finish_non_exhaustive()
+    }
+}
+
+impl MethodEntry {
+    /// Default parameters as a JSON object.
+    pub fn defaults(&self) -> Value {
+        (self.defaults)()
+    }
+
+    /// Defaults overlaid with `params` (a JSON object; `null` means none), checked by
+    /// parsing into the typed `Params`. The result is what goes into cell keys.
+    pub fn resolve_params(&self, params: &Value) -> Result<Value> {
+        let mut out = self.defaults();
+        match (params, &mut out) {
+            (Value::Null, _) => {}
+            (Value::Object(p), Value::Object(o)) => {
+                for (k, v) in p {
+                    o.insert(k.clone(), v.clone());
+                }
+            }
+            (Value::Object(p), _) => {
+                if let Some(k) = p.keys().next() {
+                    return Err(HarnessError::input(format!(
+                        "method '{}' has no parameters (got '{k}')",
+                        self.name
+                    )));
+                }
+            }
+            (other, _) => {
+                return Err(HarnessError::input(format!(
+                    "method '{}': parameters must be a table, got {other}",
+                    self.name
+                )));
+            }
+        }
+        // Validate by building once without ground truth when the method allows it; the
+        // parse step alone is what matters (oracles fail later without ground truth).
+        (self.build)(&out, &MethodEnv::default())
+            .map(drop)
+            .or_else(|e| match e {
+                MethodError::InvalidParameter { .. } => Err(e),
+                _ => Ok(()),
+            })
+            .map_err(|e| HarnessError::input(format!("method '{}': {e}", self.name)))?;
+        Ok(out)
+    }
+
+    /// Builds the method from resolved parameters.
+    pub fn build(&self, params: &Value, env: &MethodEnv) -> Result<Built, MethodError> {
+        let env = if self.needs_ground_truth {
+            env.clone()
+        } else {
+            MethodEnv::default()
+        };
+        (self.build)(params, &env)
+    }
+}
+
+/// Parses `params` into the typed `P`, turning serde's message (which lists the valid
+/// keys of an unknown one) into [`MethodError::InvalidParameter`].
+pub fn parse_params<P: DeserializeOwned>(params: &Value) -> Result<P, MethodError> {
+    let v = if params.is_null() {
+        Value::Object(Default::default())
+    } else {
+        params.clone()
+    };
+    serde_json::from_value(v).map_err(|e| MethodError::InvalidParameter {
+        name: "params".into(),
+        message: e.to_string(),
+    })
+}
+
+fn defaults_of<P: Serialize + Default>() -> DefaultsFn {
+    Arc::new(|| serde_json::to_value(P::default()).unwrap_or(Value::Null))
+}
+
+/// An entry for a normal estimator.
+pub fn normals<P>(
+    name: &'static str,
+    seed: &'static str,
+    summary: &'static str,
+    params: &'static [ParamDoc],
+    make: fn(P, &MethodEnv) -> Result<Box<dyn NormalEstimator>, MethodError>,
+) -> MethodEntry
+where
+    P: DeserializeOwned + Serialize + Default + 'static,
+{
+    MethodEntry {
+        name,
+        kind: MethodKind::Normals,
+        seed,
+        summary,
+        params,
+        needs_ground_truth: false,
+        hidden: false,
+        defaults: defaults_of::<P>(),
+        build: Arc::new(move |v, env| Ok(Built::Normals(make(parse_params(v)?, env)?))),
+    }
+}
+
+/// An entry for a feature detector.
+pub fn features<P>(
+    name: &'static str,
+    seed: &'static str,
+    summary: &'static str,
+    params: &'static [ParamDoc],
+    make: fn(P, &MethodEnv) -> Result<Box<dyn FeatureDetector>, MethodError>,
+) -> MethodEntry
+where
+    P: DeserializeOwned + Serialize + Default + 'static,
+{
+    MethodEntry {
+        name,
+        kind: MethodKind::Features,
+        seed,
+        summary,
+        params,
+        needs_ground_truth: false,
+        hidden: false,
+        defaults: defaults_of::<P>(),
+        build: Arc::new(move |v, env| Ok(Built::Features(make(parse_params(v)?, env)?))),
+    }
+}
+
+/// An entry for a reconstructor.
+pub fn reconstruct<P>(
+    name: &'static str,
+    seed: &'static str,
+    summary: &'static str,
+    params: &'static [ParamDoc],
+    make: fn(P, &MethodEnv) -> Result<Box<dyn Reconstructor>, MethodError>,
+) -> MethodEntry
+where
+    P: DeserializeOwned + Serialize + Default + 'static,
+{
+    MethodEntry {
+        name,
+        kind: MethodKind::Reconstruct,
+        seed,
+        summary,
+        params,
+        needs_ground_truth: false,
+        hidden: false,
+        defaults: defaults_of::<P>(),
+        build: Arc::new(move |v, env| Ok(Built::Reconstruct(make(parse_params(v)?, env)?))),
+    }
+}
+
+impl MethodEntry {
+    /// Marks an oracle: it receives ground truth.
+    #[must_use]
+    pub fn oracle(mut self) -> Self {
+        self.needs_ground_truth = true;
+        self
+    }
+
+    /// Hides the entry from `list` (unless `--all`).
+    #[must_use]
+    pub fn hidden(mut self) -> Self {
+        self.hidden = true;
+        self
+    }
+}
+
+/// All registered methods. One line per method.
+fn entries() -> Vec<MethodEntry> {
+    use crate::methods::{debug, oracle};
+    vec![
+        // Oracles: calibrate the harness (metric floor, geometry floor).
+        oracle::gt_normals(),
+        oracle::gt_features(),
+        oracle::reference_mesh(),
+        // Algorithm crates register here, e.g.
+        // normals::<reconbench_normals::PcaParams>("pca", "seed 002 §3.1", ...),
+        // Test-only methods, hidden from `list` (see `list --all`).
+        debug::panic(),
+        debug::abort(),
+        debug::hang(),
+        debug::alloc(),
+        debug::sleep(),
+    ]
+}
+
+/// The registry, built once.
+pub fn registry() -> &'static [MethodEntry] {
+    static REG: OnceLock<Vec<MethodEntry>> = OnceLock::new();
+    REG.get_or_init(entries)
+}
+
+/// Looks a method up; the error lists the valid names.
+pub fn find(name: &str) -> Result<&'static MethodEntry> {
+    registry().iter().find(|e| e.name == name).ok_or_else(|| {
+        let names: Vec<&str> = registry()
+            .iter()
+            .filter(|e| !e.hidden)
+            .map(|e| e.name)
+            .collect();
+        HarnessError::input(format!(
+            "unknown method '{name}'; registered methods: {}",
+            names.join(", ")
+        ))
+    })
+}
+
+/// A parameter as `list` shows it.
+#[derive(Debug, Clone, Serialize)]
+pub struct ParamInfo {
+    /// Name.
+    pub name: String,
+    /// Default value.
+    pub default: Value,
+    /// Unit.
+    pub unit: String,
+    /// Description.
+    pub doc: String,
+}
+
+/// A method as `list` shows it.
+#[derive(Debug, Clone, Serialize)]
+pub struct MethodInfo {
+    /// Name.
+    pub name: String,
+    /// Kind.
+    pub kind: MethodKind,
+    /// Seed section.
+    pub seed: String,
+    /// Summary.
+    pub summary: String,
+    /// Oracle (receives ground truth)?
+    pub oracle: bool,
+    /// Parameters with defaults.
+    pub params: Vec<ParamInfo>,
+}
+
+/// Listing of the registry (hidden entries only with `all`).
+pub fn list(all: bool) -> Vec<MethodInfo> {
+    registry()
+        .iter()
+        .filter(|e| all || !e.hidden)
+        .map(|e| {
+            let defaults = e.defaults();
+            MethodInfo {
+                name: e.name.to_string(),
+                kind: e.kind,
+                seed: e.seed.to_string(),
+                summary: e.summary.to_string(),
+                oracle: e.needs_ground_truth,
+                params: e
+                    .params
+                    .iter()
+                    .map(|p| ParamInfo {
+                        name: p.name.to_string(),
+                        default: defaults.get(p.name).cloned().unwrap_or(Value::Null),
+                        unit: p.unit.to_string(),
+                        doc: p.doc.to_string(),
+                    })
+                    .collect(),
+            }
+        })
+        .collect()
+}
+
+/// Parses `key=value` overrides (`--set`): the value is read as a TOML value when it
+/// parses as one (`8`, `0.5`, `true`, `[1, 2]`, `"x"`), else taken as a bare string.
+pub fn parse_overrides(sets: &[String]) -> Result<Value> {
+    let mut map = serde_json::Map::new();
+    for s in sets {
+        let (k, v) = s
+            .split_once('=')
+            .ok_or_else(|| HarnessError::input(format!("--set '{s}': expected key=value")))?;
+        let k = k.trim();
+        if k.is_empty() {
+            return Err(HarnessError::input(format!("--set '{s}': empty key")));
+        }
+        let value = toml_scalar(v.trim());
+        map.insert(k.to_string(), value);
+    }
+    Ok(Value::Object(map))
+}
+
+fn toml_scalar(text: &str) -> Value {
+    let doc = format!("v = {text}");
+    match toml::from_str::<toml::Table>(&doc) {
+        Ok(t) => t
+            .get("v")
+            .and_then(|v| serde_json::to_value(v).ok())
+            .unwrap_or_else(|| Value::String(text.to_string())),
+        Err(_) => Value::String(text.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn names_are_unique_kebab_case_and_documented() {
+        let mut seen = std::collections::BTreeSet::new();
+        for e in registry() {
+            assert!(seen.insert(e.name), "duplicate {}", e.name);
+            assert!(
+                e.name
+                    .chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'),
+                "{}",
+                e.name
+            );
+            let defaults = e.defaults();
+            let keys: Vec<&String> = defaults
+                .as_object()
+                .map(|m| m.keys().collect())
+                .unwrap_or_default();
+            assert_eq!(keys.len(), e.params.len(), "{}: docs vs defaults", e.name);
+            for p in e.params {
+                assert!(
+                    defaults.get(p.name).is_some(),
+                    "{}: {} undocumented default",
+                    e.name,
+                    p.name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_names_and_keys_list_the_valid_ones() {
+        let err = find("nope").unwrap_err().to_string();
+        assert!(
+            err.contains("gt-normals") && err.contains("reference-mesh"),
+            "{err}"
+        );
+        assert!(!err.contains("debug-panic"), "{err}");
+        let e = find("reference-mesh").unwrap();
+        let err = e
+            .resolve_params(&json!({"resolutoin": 3}))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("resolution"), "{err}");
+        let ok = e.resolve_params(&json!({"resolution": 12})).unwrap();
+        assert_eq!(ok["resolution"], json!(12));
+    }
+
+    #[test]
+    fn overrides_parse_toml_values() {
+        let v = parse_overrides(&[
+            "k=8".into(),
+            "r=0.5".into(),
+            "s=torus:R=1".into(),
+            "b=true".into(),
+        ])
+        .unwrap();
+        assert_eq!(v, json!({"k": 8, "r": 0.5, "s": "torus:R=1", "b": true}));
+        assert!(parse_overrides(&["novalue".into()]).is_err());
+    }
+}

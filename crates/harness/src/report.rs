@@ -1,0 +1,545 @@
+//! `results/<experiment>/report.md` and everything it links: tables, plots, renders,
+//! published figures.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::aggregate::{Group, aggregate};
+use crate::compare::Tol;
+use crate::error::{HarnessError, Result};
+use crate::experiment::{Expect, Experiment, ReportOptions};
+use crate::plots::{BoxPlot, LinePlot, Plot, Series, loglog_slope};
+use crate::registry::MethodKind;
+use crate::runner::Manifest;
+use crate::store::{Row, Status, read_rows};
+use crate::tables::{self, TIME_COLUMN, fmt_num};
+
+/// A published figure next to its reproduction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExpectResult {
+    /// Selector as text.
+    pub selector: String,
+    /// Metric.
+    pub metric: String,
+    /// Published value.
+    pub published: f64,
+    /// Reproduced value (mean over the matching configurations' means), if any matched.
+    pub reproduced: Option<f64>,
+    /// `reproduced / published`.
+    pub ratio: Option<f64>,
+    /// Configurations that matched.
+    pub matched: usize,
+    /// Source of the published value.
+    pub source: String,
+    /// Tolerance.
+    pub tol: String,
+    /// Within tolerance.
+    pub pass: bool,
+}
+
+/// What `write_report` produced.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ReportOutput {
+    /// `report.md`.
+    pub report: PathBuf,
+    /// Table files.
+    pub tables: Vec<PathBuf>,
+    /// Plot files.
+    pub plots: Vec<PathBuf>,
+    /// Published-figure checks.
+    pub expect: Vec<ExpectResult>,
+    /// Rows used.
+    pub rows: usize,
+    /// Rows not ok.
+    pub failed: usize,
+}
+
+impl ReportOutput {
+    /// Expectations outside their tolerance.
+    pub fn misses(&self) -> usize {
+        self.expect.iter().filter(|e| !e.pass).count()
+    }
+}
+
+/// Loads the rows of a results directory (or a results file) and the experiment recorded
+/// in its manifest, if it still parses.
+pub fn load_results(path: &Path) -> Result<(Vec<Row>, Option<Experiment>, Option<Manifest>)> {
+    let (file, dir) = if path.is_dir() {
+        (path.join("results.jsonl"), path.to_path_buf())
+    } else {
+        (
+            path.to_path_buf(),
+            path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        )
+    };
+    if !file.exists() {
+        return Err(HarnessError::input(format!(
+            "{}: no results (run the experiment first, or merge shard results)",
+            file.display()
+        )));
+    }
+    let (rows, _) = read_rows(&file)?;
+    let manifest: Option<Manifest> = std::fs::read_to_string(dir.join("manifest.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok());
+    let exp = manifest
+        .as_ref()
+        .and_then(|m| m.file_text.as_ref().map(|t| (t, m.experiment.clone())))
+        .and_then(|(t, name)| Experiment::parse(t, &name).ok());
+    Ok((rows, exp, manifest))
+}
+
+fn slug(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.chars() {
+        if c.is_ascii_alphanumeric() || c == '.' {
+            out.push(c.to_ascii_lowercase());
+        } else if !out.ends_with('-') {
+            out.push('-');
+        }
+    }
+    out.trim_matches('-').to_string()
+}
+
+fn value_matches(want: &toml::Value, have: &Value) -> bool {
+    match (want, have) {
+        (toml::Value::String(a), Value::String(b)) => a == b,
+        (toml::Value::Integer(a), v) => v
+            .as_f64()
+            .is_some_and(|b| (*a as f64 - b).abs() <= 1e-12 * b.abs().max(1.0)),
+        (toml::Value::Float(a), v) => v
+            .as_f64()
+            .is_some_and(|b| (a - b).abs() <= 1e-12 * b.abs().max(1.0)),
+        (toml::Value::Boolean(a), Value::Bool(b)) => a == b,
+        _ => false,
+    }
+}
+
+fn group_matches(g: &Group, sel: &toml::Table) -> bool {
+    sel.iter().all(|(k, want)| match k.as_str() {
+        "dataset" => want.as_str() == Some(g.labels.dataset.as_str()),
+        "perturbation" => want.as_str() == Some(g.labels.perturb.as_str()),
+        "method" => want
+            .as_str()
+            .is_some_and(|w| w == g.labels.method || w == g.method),
+        "shape" => want.as_str() == Some(g.data.shape.as_str()),
+        "points" => value_matches(want, &Value::from(g.data.points)),
+        k => {
+            if let Some(p) = k.strip_prefix("params.") {
+                g.params.get(p).is_some_and(|v| value_matches(want, v))
+            } else {
+                // A perturbation key; absent means 0 (no perturbation).
+                let v = g.data.perturb.get(k).cloned().unwrap_or(Value::from(0.0));
+                value_matches(want, &v)
+            }
+        }
+    })
+}
+
+/// Evaluates `[[expect]]` entries against aggregated groups.
+pub fn check_expectations(expect: &[Expect], groups: &[Group]) -> Result<Vec<ExpectResult>> {
+    let mut out = Vec::new();
+    for e in expect {
+        let tol = Tol::parse(&e.tol)?;
+        let vals: Vec<f64> = groups
+            .iter()
+            .filter(|g| group_matches(g, &e.select))
+            .filter_map(|g| g.metrics.get(&e.metric).map(|s| s.mean))
+            .collect();
+        let reproduced = (!vals.is_empty()).then(|| vals.iter().sum::<f64>() / vals.len() as f64);
+        let ratio = reproduced.and_then(|r| (e.value != 0.0).then(|| r / e.value));
+        let selector = e
+            .select
+            .iter()
+            .map(|(k, v)| {
+                format!(
+                    "{k}={}",
+                    v.as_str().map_or_else(|| v.to_string(), str::to_string)
+                )
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        out.push(ExpectResult {
+            selector,
+            metric: e.metric.clone(),
+            published: e.value,
+            reproduced,
+            ratio,
+            matched: vals.len(),
+            source: e.source.clone(),
+            tol: tol.to_string(),
+            pass: reproduced.is_some_and(|r| tol.within(e.value, r)),
+        });
+    }
+    Ok(out)
+}
+
+fn kind_title(k: MethodKind) -> &'static str {
+    match k {
+        MethodKind::Normals => "Normal estimation",
+        MethodKind::Features => "Sharp features",
+        MethodKind::Reconstruct => "Reconstruction",
+    }
+}
+
+/// Writes tables, plots and `report.md` into `dir` from `rows`. `exp` supplies report
+/// options and expectations (defaults without it).
+pub fn write_report(
+    dir: &Path,
+    rows: &[Row],
+    exp: Option<&Experiment>,
+    manifest: Option<&Manifest>,
+) -> Result<ReportOutput> {
+    let default_opts = ReportOptions::default();
+    let opts = exp.map_or(&default_opts, |e| &e.file.report);
+    // Only rows of the current grid, when the experiment is known.
+    let rows: Vec<Row> = match exp {
+        Some(e) => {
+            let keys: BTreeSet<&str> = e.cells.iter().map(|c| c.key.as_str()).collect();
+            rows.iter()
+                .filter(|r| keys.contains(r.key.as_str()))
+                .cloned()
+                .collect()
+        }
+        None => rows.to_vec(),
+    };
+    let groups = aggregate(&rows);
+    let name = exp.map_or_else(
+        || manifest.map_or_else(|| "experiment".to_string(), |m| m.experiment.clone()),
+        |e| e.name.clone(),
+    );
+    let mut md = String::new();
+    let _ = writeln!(md, "# {name}\n");
+    if let Some(e) = exp {
+        if !e.file.description.is_empty() {
+            let _ = writeln!(md, "{}\n", e.file.description.trim());
+        }
+    }
+    let failed: Vec<&Row> = rows.iter().filter(|r| r.status != Status::Ok).collect();
+    let _ = writeln!(
+        md,
+        "{} cells, {} ok, {} failed. Raw rows: [results.jsonl](results.jsonl); provenance and the resolved grid: [manifest.json](manifest.json).\n",
+        rows.len(),
+        rows.len() - failed.len(),
+        failed.len()
+    );
+    if let Some(run) = manifest.and_then(|m| m.runs.last()) {
+        let _ = writeln!(
+            md,
+            "Run {} on `{}` ({} CPUs), commit `{}`{}, {}; {} workers x {} thread(s).\n",
+            run.started,
+            run.cpu_model,
+            run.cpus,
+            run.git_commit.chars().take(12).collect::<String>(),
+            if run.git_dirty == Some(true) {
+                " (dirty)"
+            } else {
+                ""
+            },
+            run.rustc,
+            manifest.map_or(0, |m| m.jobs),
+            manifest.map_or(1, |m| m.threads_per_worker),
+        );
+    }
+
+    // Published figures.
+    let expect = match exp {
+        Some(e) => check_expectations(&e.file.expect, &groups)?,
+        None => Vec::new(),
+    };
+    if !expect.is_empty() {
+        let misses = expect.iter().filter(|e| !e.pass).count();
+        let _ = writeln!(
+            md,
+            "## Published figures\n\n{} of {} within tolerance.\n",
+            expect.len() - misses,
+            expect.len()
+        );
+        md.push_str("| cells | metric | published | reproduced | ratio | tolerance | source | |\n|---|---|---:|---:|---:|---|---|---|\n");
+        for e in &expect {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                e.selector,
+                e.metric,
+                fmt_num(e.published),
+                e.reproduced.map_or("no match".into(), fmt_num),
+                e.ratio.map_or("–".into(), fmt_num),
+                e.tol,
+                e.source,
+                if e.pass { "ok" } else { "**MISS**" }
+            );
+        }
+        md.push('\n');
+    }
+
+    // Tables.
+    let tables_dir = dir.join("tables");
+    let mut table_files = Vec::new();
+    let built = tables::build(&groups, &opts.metrics);
+    for t in &built {
+        let stem = t.kind.as_str();
+        let _ = writeln!(md, "## {}\n", kind_title(t.kind));
+        md.push_str("Mean ± std over seeds; best of each dataset and perturbation in bold; ↑ higher is better, ↓ lower is better.\n\n");
+        md.push_str(&tables::markdown(t));
+        let mut links = Vec::new();
+        for fmt in &opts.tables {
+            let (text, ext) = match fmt.as_str() {
+                "md" => (tables::markdown(t), "md"),
+                "tex" => (
+                    tables::latex(t, &format!("{name}: {}", kind_title(t.kind))),
+                    "tex",
+                ),
+                _ => (tables::csv(t), "csv"),
+            };
+            let p = tables_dir.join(format!("{stem}.{ext}"));
+            crate::error::write_atomic(&p, text.as_bytes())?;
+            links.push(format!("[{ext}](tables/{stem}.{ext})"));
+            table_files.push(p);
+        }
+        if !links.is_empty() {
+            let _ = writeln!(md, "\nTable files: {}.\n", links.join(", "));
+        }
+
+        if opts.plots {
+            let plots = kind_plots(
+                t.kind,
+                &groups,
+                &t.columns,
+                opts,
+                exp.map_or(&[][..], |e| &e.swept[..]),
+            );
+            for (file, caption, plot) in plots {
+                let stem_path = dir.join("plots").join(&file);
+                crate::plots::write(&plot, &stem_path, (opts.plot_size[0], opts.plot_size[1]))?;
+                let _ = writeln!(
+                    md,
+                    "![{caption}](plots/{file}.png)\n\n*{caption}* ([svg](plots/{file}.svg))\n"
+                );
+            }
+        }
+    }
+    let plot_files = list_files(&dir.join("plots"));
+
+    // Renders.
+    let renders: Vec<&Row> = rows.iter().filter(|r| r.render.is_some()).collect();
+    if !renders.is_empty() {
+        let _ = writeln!(
+            md,
+            "## Renders\n\nReconstructions coloured by distance to the true surface (fraction of the diagonal, fixed scale 0 to {} for every method), seed index {}, three viewpoints.\n",
+            fmt_num(opts.render_max),
+            renders.iter().map(|r| r.spec.seed_index).min().unwrap_or(0)
+        );
+        for r in renders {
+            let _ = writeln!(
+                md,
+                "**{} / {} / {}**\n\n![]({})\n",
+                r.labels.dataset,
+                r.labels.perturb,
+                r.labels.method,
+                r.render.as_deref().unwrap_or_default()
+            );
+        }
+    }
+
+    if !failed.is_empty() {
+        md.push_str("## Failed cells\n\n| dataset | perturbation | method | seed | status | reason |\n|---|---|---|---:|---|---|\n");
+        for r in &failed {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} |",
+                r.labels.dataset,
+                r.labels.perturb,
+                r.labels.method,
+                r.spec.seed_index,
+                r.status.as_str(),
+                r.error.as_deref().unwrap_or("").replace('|', "\\|")
+            );
+        }
+        md.push('\n');
+    }
+    let report = dir.join("report.md");
+    crate::error::write_atomic(&report, md.as_bytes())?;
+    Ok(ReportOutput {
+        report,
+        tables: table_files,
+        plots: plot_files,
+        expect,
+        rows: rows.len(),
+        failed: failed.len(),
+    })
+}
+
+fn list_files(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
+/// The plots of one method kind: `(file stem, caption, plot)`.
+fn kind_plots(
+    kind: MethodKind,
+    groups: &[Group],
+    columns: &[String],
+    opts: &ReportOptions,
+    swept: &[String],
+) -> Vec<(String, String, Plot)> {
+    let gs: Vec<&Group> = groups.iter().filter(|g| g.kind == kind).collect();
+    let mut out = Vec::new();
+    let datasets: Vec<String> = {
+        let mut v: Vec<String> = Vec::new();
+        for g in &gs {
+            if !v.contains(&g.labels.dataset) {
+                v.push(g.labels.dataset.clone());
+            }
+        }
+        v
+    };
+    // Metric vs perturbation level.
+    let x = opts.x.clone().or_else(|| swept.first().cloned());
+    let metrics: Vec<String> = if opts.plot_metrics.is_empty() {
+        columns
+            .iter()
+            .filter(|c| *c != TIME_COLUMN)
+            .take(2)
+            .cloned()
+            .collect()
+    } else {
+        opts.plot_metrics.clone()
+    };
+    if let Some(x) = &x {
+        for d in &datasets {
+            for m in &metrics {
+                let mut series: BTreeMap<String, Series> = BTreeMap::new();
+                let mut order: Vec<String> = Vec::new();
+                for g in gs.iter().filter(|g| &g.labels.dataset == d) {
+                    let Some(s) = g.metrics.get(m) else { continue };
+                    let xv = if x == "points" {
+                        g.data.points as f64
+                    } else {
+                        g.data.perturb.get(x).and_then(Value::as_f64).unwrap_or(0.0)
+                    };
+                    let rest: Vec<String> = g
+                        .data
+                        .perturb
+                        .iter()
+                        .filter(|(k, _)| *k != x && swept.contains(k))
+                        .map(|(k, v)| format!("{k}={v}"))
+                        .collect();
+                    let name = if rest.is_empty() {
+                        g.labels.method.clone()
+                    } else {
+                        format!("{} {}", g.labels.method, rest.join(" "))
+                    };
+                    if !order.contains(&name) {
+                        order.push(name.clone());
+                    }
+                    series
+                        .entry(name.clone())
+                        .or_insert_with(|| Series {
+                            name,
+                            points: Vec::new(),
+                        })
+                        .points
+                        .push((xv, s.mean, s.mean - s.std, s.mean + s.std));
+                }
+                if series.is_empty() {
+                    continue;
+                }
+                let series: Vec<Series> = order
+                    .into_iter()
+                    .filter_map(|n| series.remove(&n))
+                    .collect();
+                out.push((
+                    format!("{}_{}_vs_{}_{}", kind.as_str(), slug(m), slug(x), slug(d)),
+                    format!("{m} vs {x} on {d} (mean, band = ± std over seeds)"),
+                    Plot::Lines(LinePlot {
+                        title: format!("{d}: {m}"),
+                        x_label: format!("{x} (fraction of diagonal)"),
+                        y_label: m.clone(),
+                        series,
+                        log: false,
+                    }),
+                ));
+            }
+        }
+    }
+    // Time vs size (log-log) when sizes vary.
+    let sizes: BTreeSet<u64> = gs.iter().map(|g| g.data.points).collect();
+    if sizes.len() > 1 {
+        let mut per: BTreeMap<String, BTreeMap<u64, Vec<f64>>> = BTreeMap::new();
+        for g in &gs {
+            if let Some(s) = g.cost.get("method_s") {
+                per.entry(g.labels.method.clone())
+                    .or_default()
+                    .entry(g.data.points)
+                    .or_default()
+                    .push(s.mean);
+            }
+        }
+        let series: Vec<Series> = per
+            .into_iter()
+            .map(|(name, by)| {
+                let pts: Vec<(f64, f64)> = by
+                    .into_iter()
+                    .map(|(n, v)| (n as f64, v.iter().sum::<f64>() / v.len() as f64))
+                    .filter(|(_, t)| *t > 0.0)
+                    .collect();
+                let slope = loglog_slope(&pts);
+                Series {
+                    name: match slope {
+                        Some(s) => format!("{name} (slope {s:.2})"),
+                        None => name,
+                    },
+                    points: pts.into_iter().map(|(x, y)| (x, y, y, y)).collect(),
+                }
+            })
+            .filter(|s| !s.points.is_empty())
+            .collect();
+        if !series.is_empty() {
+            out.push((
+                format!("{}_time_vs_size", kind.as_str()),
+                "method time vs number of points (log-log, fitted slope in the legend)".to_string(),
+                Plot::Lines(LinePlot {
+                    title: format!("{}: time vs size", kind_title(kind)),
+                    x_label: "points".into(),
+                    y_label: "method time (s)".into(),
+                    series,
+                    log: true,
+                }),
+            ));
+        }
+    }
+    // Box plots of per-point errors.
+    for d in &datasets {
+        let boxes: Vec<(String, crate::store::Dist)> = gs
+            .iter()
+            .filter(|g| &g.labels.dataset == d)
+            .filter_map(|g| {
+                g.dist
+                    .clone()
+                    .map(|dist| (format!("{} @ {}", g.labels.method, g.labels.perturb), dist))
+            })
+            .collect();
+        if boxes.is_empty() {
+            continue;
+        }
+        let what = boxes[0].1.what.clone();
+        out.push((
+            format!("{}_errors_box_{}", kind.as_str(), slug(d)),
+            format!("per-point {what} on {d} (box = quartiles, whiskers = min and p95; averaged over seeds)"),
+            Plot::Boxes(BoxPlot {
+                title: format!("{d}: per-point {what}"),
+                y_label: what,
+                boxes,
+            }),
+        ));
+    }
+    out
+}

@@ -1,0 +1,646 @@
+//! The runner: runs the cells of an experiment in parallel, each in its own worker
+//! process, with a per-cell timeout and memory limit, appending one JSON line per cell.
+//!
+//! Isolation: the worker is a separate process (the same binary with the `worker` verb),
+//! so a panic, an abort, a segfault, a hang or a memory blow-up ends only that process;
+//! the runner records the cell as failed with the reason and goes on.
+//!
+//! * timeout: the runner polls `try_wait` and kills the worker after the cell timeout;
+//! * memory: the runner reads the worker's resident set (`/proc/<pid>/status`) while it
+//!   polls and kills it above the limit (status `oom`); a failed allocation inside the
+//!   worker aborts it with Rust's "memory allocation failed" message, also `oom`;
+//!   a SIGKILL from outside (e.g. the kernel's OOM killer) is reported as a crash by
+//!   SIGKILL. No `unsafe`/`setrlimit` is needed (the workspace forbids unsafe code).
+
+use std::collections::{BTreeMap, HashSet};
+use std::ffi::OsString;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitStatus, Stdio};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{HarnessError, Result};
+use crate::experiment::{Cell, Experiment, shard_cells};
+use crate::provenance::{Provenance, rss_mib};
+use crate::registry::MethodKind;
+use crate::store::{Row, Status, Store, dedupe_sorted, read_rows, write_rows};
+use crate::worker::{PANIC_PREFIX, REPLY_PREFIX, RenderRequest, Reply, Request};
+
+/// How to run an experiment.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Results directory (e.g. `results/<name>`).
+    pub out_dir: PathBuf,
+    /// Parallel workers.
+    pub jobs: usize,
+    /// Skip cells that already have a row.
+    pub resume: bool,
+    /// With `resume`: run again the cells whose row is not `ok`.
+    pub retry_failed: bool,
+    /// Run only shard `i` of `n`.
+    pub shard: Option<(usize, usize)>,
+    /// Worker command: program and leading arguments (e.g. `[current_exe, "worker"]`).
+    pub worker: Vec<OsString>,
+    /// Overrides the experiment's per-cell timeout (seconds).
+    pub timeout_s: Option<f64>,
+    /// Overrides the experiment's memory limit (MiB).
+    pub memory_limit_mib: Option<u64>,
+    /// `RAYON_NUM_THREADS` of each worker.
+    pub threads_per_worker: usize,
+    /// Draw a progress bar (only on a terminal).
+    pub progress: bool,
+}
+
+/// File names of a run (shards write their own files).
+pub fn result_file_names(shard: Option<(usize, usize)>) -> (String, String) {
+    match shard {
+        None => ("results.jsonl".into(), "manifest.json".into()),
+        Some((i, n)) => (
+            format!("results.shard-{i}-of-{n}.jsonl"),
+            format!("manifest.shard-{i}-of-{n}.json"),
+        ),
+    }
+}
+
+/// A failed cell in the summary.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FailedCell {
+    /// Cell key.
+    pub key: String,
+    /// `dataset / perturbation / method seed i`.
+    pub label: String,
+    /// Status.
+    pub status: Status,
+    /// Reason.
+    pub reason: String,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RunSummary {
+    /// Experiment name.
+    pub experiment: String,
+    /// Cells in this run (after sharding).
+    pub cells: usize,
+    /// Cells skipped by `--resume`.
+    pub skipped: usize,
+    /// Cells run.
+    pub ran: usize,
+    /// Cells run that finished ok.
+    pub ok: usize,
+    /// Failed cells run now.
+    pub failed: Vec<FailedCell>,
+    /// Wall time, seconds.
+    pub wall_s: f64,
+    /// Results file.
+    pub results: PathBuf,
+    /// Manifest file.
+    pub manifest: PathBuf,
+}
+
+/// The manifest written next to the results.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Manifest {
+    /// Experiment name.
+    pub experiment: String,
+    /// Experiment file.
+    pub file: Option<PathBuf>,
+    /// The experiment file's text (what was run).
+    pub file_text: Option<String>,
+    /// Shard `[i, n]`, if any.
+    pub shard: Option<(usize, usize)>,
+    /// Parallel workers.
+    pub jobs: usize,
+    /// Threads per worker (`RAYON_NUM_THREADS`).
+    pub threads_per_worker: usize,
+    /// Per-cell timeout, seconds.
+    pub timeout_s: f64,
+    /// Memory limit, MiB.
+    pub memory_limit_mib: Option<u64>,
+    /// Provenance of each run into this directory (several with `--resume`).
+    pub runs: Vec<Provenance>,
+    /// The resolved grid (every cell with its key, labels and resolved parameters).
+    pub cells: Vec<Cell>,
+}
+
+/// Runs an experiment. Writes `results.jsonl` (rewritten sorted by grid index at the
+/// end) and `manifest.json` in `opts.out_dir`.
+pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
+    if opts.worker.is_empty() {
+        return Err(HarnessError::failure("no worker command"));
+    }
+    let t0 = Instant::now();
+    crate::error::create_dir_all(&opts.out_dir)?;
+    let (results_name, manifest_name) = result_file_names(opts.shard);
+    let results = opts.out_dir.join(results_name);
+    let manifest_path = opts.out_dir.join(manifest_name);
+    let cells = shard_cells(&exp.cells, opts.shard);
+    let timeout_s = opts.timeout_s.unwrap_or(exp.timeout_s);
+    let memory_limit = opts.memory_limit_mib.or(exp.file.memory_limit_mib);
+    let jobs = opts.jobs.max(1);
+
+    // Resume or start afresh.
+    let mut runs = Vec::new();
+    let done: HashSet<String> = if opts.resume {
+        let (rows, _) = read_rows(&results)?;
+        if let Ok(text) = std::fs::read_to_string(&manifest_path) {
+            if let Ok(m) = serde_json::from_str::<Manifest>(&text) {
+                runs = m.runs;
+            }
+        }
+        rows.into_iter()
+            .filter(|r| !(opts.retry_failed && r.status != Status::Ok))
+            .map(|r| r.key)
+            .collect()
+    } else {
+        if results.exists() {
+            std::fs::remove_file(&results).map_err(|e| HarnessError::io(&results, e))?;
+        }
+        HashSet::new()
+    };
+    runs.push(Provenance::collect());
+    let manifest = Manifest {
+        experiment: exp.name.clone(),
+        file: exp.path.clone(),
+        file_text: exp
+            .path
+            .as_ref()
+            .and_then(|p| std::fs::read_to_string(p).ok()),
+        shard: opts.shard,
+        jobs,
+        threads_per_worker: opts.threads_per_worker,
+        timeout_s,
+        memory_limit_mib: memory_limit,
+        runs,
+        cells: cells.clone(),
+    };
+    let text = serde_json::to_string_pretty(&manifest)
+        .map_err(|e| HarnessError::failure(format!("manifest: {e}")))?;
+    crate::error::write_atomic(&manifest_path, text.as_bytes())?;
+
+    let todo: Vec<&Cell> = cells.iter().filter(|c| !done.contains(&c.key)).collect();
+    let skipped = cells.len() - todo.len();
+    // Renders: reconstructions at the lowest seed index of each configuration.
+    let min_seed = cells.iter().map(|c| c.spec.seed_index).min().unwrap_or(0);
+    let report = &exp.file.report;
+
+    let store = Mutex::new(Store::open(&results)?);
+    let next = AtomicUsize::new(0);
+    let failed = Mutex::new(Vec::new());
+    let ok = AtomicUsize::new(0);
+    let bar = progress_bar(todo.len(), opts.progress);
+    let write_error: Mutex<Option<HarnessError>> = Mutex::new(None);
+
+    std::thread::scope(|s| {
+        for _ in 0..jobs.min(todo.len().max(1)) {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(cell) = todo.get(i) else { break };
+                    if write_error.lock().map(|e| e.is_some()).unwrap_or(true) {
+                        break;
+                    }
+                    let render = (report.renders
+                        && cell.spec.kind == MethodKind::Reconstruct
+                        && cell.spec.seed_index == min_seed)
+                        .then(|| RenderRequest {
+                            path: opts
+                                .out_dir
+                                .join("renders")
+                                .join(format!("{}.png", cell.key)),
+                            rel: format!("renders/{}.png", cell.key),
+                            max: report.render_max,
+                            size: report.render_size,
+                        });
+                    let row = run_cell(
+                        cell,
+                        &opts.worker,
+                        timeout_s,
+                        memory_limit,
+                        opts.threads_per_worker,
+                        render,
+                    );
+                    if row.status == Status::Ok {
+                        ok.fetch_add(1, Ordering::SeqCst);
+                    } else {
+                        let f = FailedCell {
+                            key: row.key.clone(),
+                            label: format!(
+                                "{} / {} / {} seed {}",
+                                row.labels.dataset,
+                                row.labels.perturb,
+                                row.labels.method,
+                                row.spec.seed_index
+                            ),
+                            status: row.status,
+                            reason: row.error.clone().unwrap_or_default(),
+                        };
+                        let msg = format!(
+                            "cell {} failed ({}): {}",
+                            f.label,
+                            f.status.as_str(),
+                            f.reason
+                        );
+                        if bar.is_hidden() {
+                            if opts.progress {
+                                eprintln!("{msg}");
+                            }
+                        } else {
+                            bar.println(msg);
+                        }
+                        if let Ok(mut v) = failed.lock() {
+                            v.push(f);
+                        }
+                    }
+                    let res = store
+                        .lock()
+                        .map_err(|_| HarnessError::failure("store lock poisoned"))
+                        .and_then(|mut st| st.append(&row));
+                    if let Err(e) = res {
+                        if let Ok(mut w) = write_error.lock() {
+                            *w = Some(e);
+                        }
+                        break;
+                    }
+                    bar.inc(1);
+                }
+            });
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = write_error.into_inner().ok().flatten() {
+        return Err(e);
+    }
+    drop(store);
+
+    // Compact: keep the latest row per key of this grid, sorted by grid index, so a
+    // finished run's file does not depend on the completion order.
+    let keys: HashSet<&str> = cells.iter().map(|c| c.key.as_str()).collect();
+    let (rows, _) = read_rows(&results)?;
+    let rows: Vec<Row> = dedupe_sorted(
+        rows.into_iter()
+            .filter(|r| keys.contains(r.key.as_str()))
+            .collect(),
+    );
+    write_rows(&results, &rows)?;
+
+    let mut failed = failed.into_inner().unwrap_or_default();
+    failed.sort_by(|a, b| a.label.cmp(&b.label));
+    Ok(RunSummary {
+        experiment: exp.name.clone(),
+        cells: cells.len(),
+        skipped,
+        ran: todo.len(),
+        ok: ok.load(Ordering::SeqCst),
+        failed,
+        wall_s: t0.elapsed().as_secs_f64(),
+        results,
+        manifest: manifest_path,
+    })
+}
+
+fn progress_bar(n: usize, show: bool) -> indicatif::ProgressBar {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    let bar = ProgressBar::with_draw_target(
+        Some(n as u64),
+        if show {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    if let Ok(style) = ProgressStyle::with_template(
+        "{bar:40.cyan/blue} {pos}/{len} cells  {elapsed_precise}  ETA {eta_precise}",
+    ) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// Runs one cell in a worker process and turns whatever happens into a row.
+pub fn run_cell(
+    cell: &Cell,
+    worker: &[OsString],
+    timeout_s: f64,
+    memory_limit_mib: Option<u64>,
+    threads: usize,
+    render: Option<RenderRequest>,
+) -> Row {
+    let t0 = Instant::now();
+    let req = Request {
+        cell: cell.clone(),
+        timeout_s,
+        render,
+    };
+    let mut row = match spawn_and_wait(&req, worker, timeout_s, memory_limit_mib, threads) {
+        Ok(Outcome::Reply(reply)) => {
+            let mut row = Row::failed(cell, reply.status, "");
+            row.error = reply.error;
+            row.metrics = reply.metrics;
+            row.diagnostics = reply.diagnostics;
+            row.dist = reply.dist;
+            row.render = reply.render;
+            row.cost = reply.cost;
+            row
+        }
+        Ok(Outcome::Failed(status, reason)) => Row::failed(cell, status, reason),
+        Err(e) => Row::failed(
+            cell,
+            Status::Crash,
+            format!("could not run the worker: {e}"),
+        ),
+    };
+    row.cost.wall_s = t0.elapsed().as_secs_f64();
+    row
+}
+
+enum Outcome {
+    Reply(Box<Reply>),
+    Failed(Status, String),
+}
+
+fn spawn_and_wait(
+    req: &Request,
+    worker: &[OsString],
+    timeout_s: f64,
+    memory_limit_mib: Option<u64>,
+    threads: usize,
+) -> std::io::Result<Outcome> {
+    let payload = serde_json::to_vec(req).map_err(std::io::Error::other)?;
+    let mut child = Command::new(&worker[0])
+        .args(&worker[1..])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .env("RAYON_NUM_THREADS", threads.max(1).to_string())
+        .spawn()?;
+    let pid = child.id();
+    let mut stdin = child.stdin.take();
+    let writer = std::thread::spawn(move || {
+        if let Some(mut w) = stdin.take() {
+            let _ = w.write_all(&payload);
+        }
+    });
+    let mut out = child.stdout.take();
+    let mut err = child.stderr.take();
+    let out_reader = std::thread::spawn(move || read_tail(out.as_mut(), 1 << 24));
+    let err_reader = std::thread::spawn(move || read_tail(err.as_mut(), 1 << 16));
+
+    let t0 = Instant::now();
+    let timeout = Duration::from_secs_f64(timeout_s);
+    let mut killed: Option<(Status, String)> = None;
+    let status: ExitStatus = loop {
+        if let Some(st) = child.try_wait()? {
+            break st;
+        }
+        if killed.is_none() {
+            if t0.elapsed() > timeout {
+                killed = Some((
+                    Status::Timeout,
+                    format!("exceeded the per-cell timeout of {timeout_s} s"),
+                ));
+            } else if let (Some(limit), Some((rss, _))) = (memory_limit_mib, rss_mib(Some(pid))) {
+                if rss > limit as f64 {
+                    killed = Some((
+                        Status::Oom,
+                        format!("resident memory {rss:.0} MiB exceeded the limit of {limit} MiB"),
+                    ));
+                }
+            }
+            if killed.is_some() {
+                let _ = child.kill();
+            }
+        }
+        std::thread::sleep(Duration::from_millis(15));
+    };
+    let _ = writer.join();
+    let stdout = out_reader.join().unwrap_or_default();
+    let stderr = err_reader.join().unwrap_or_default();
+    if let Some((st, reason)) = killed {
+        return Ok(Outcome::Failed(st, reason));
+    }
+    if status.success() {
+        if let Some(line) = stdout
+            .lines()
+            .rev()
+            .find_map(|l| l.strip_prefix(REPLY_PREFIX))
+        {
+            return Ok(match serde_json::from_str::<Reply>(line) {
+                Ok(r) => Outcome::Reply(Box::new(r)),
+                Err(e) => Outcome::Failed(Status::Crash, format!("unreadable worker reply: {e}")),
+            });
+        }
+    }
+    Ok(Outcome::Failed(
+        classify(status, &stderr).0,
+        classify(status, &stderr).1,
+    ))
+}
+
+fn read_tail(r: Option<&mut impl Read>, cap: usize) -> String {
+    let Some(r) = r else { return String::new() };
+    let mut buf = Vec::new();
+    let mut chunk = [0u8; 8192];
+    loop {
+        match r.read(&mut chunk) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => {
+                buf.extend_from_slice(&chunk[..n]);
+                if buf.len() > 2 * cap {
+                    buf.drain(..buf.len() - cap);
+                }
+            }
+        }
+    }
+    if buf.len() > cap {
+        buf.drain(..buf.len() - cap);
+    }
+    String::from_utf8_lossy(&buf).into_owned()
+}
+
+fn stderr_tail(stderr: &str) -> String {
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    let tail = lines[lines.len().saturating_sub(3)..].join(" | ");
+    let mut t: String = tail.chars().take(400).collect();
+    if t.len() < tail.len() {
+        t.push_str("...");
+    }
+    t
+}
+
+/// Names the way a worker ended without a reply.
+fn classify(status: ExitStatus, stderr: &str) -> (Status, String) {
+    if let Some(msg) = stderr
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix(PANIC_PREFIX))
+    {
+        let msg: String = serde_json::from_str(msg).unwrap_or_else(|_| msg.to_string());
+        return (Status::Panic, format!("panicked: {msg}"));
+    }
+    let alloc_failed = stderr.lines().find(|l| l.contains("memory allocation of"));
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        if let Some(sig) = status.signal() {
+            return match sig {
+                6 if alloc_failed.is_some() => (
+                    Status::Oom,
+                    format!("out of memory: {}", alloc_failed.unwrap_or_default().trim()),
+                ),
+                6 => (Status::Crash, with_tail("aborted (SIGABRT)", stderr)),
+                9 => (
+                    Status::Crash,
+                    with_tail(
+                        "killed by SIGKILL (from outside, e.g. the kernel's out-of-memory killer)",
+                        stderr,
+                    ),
+                ),
+                11 => (
+                    Status::Crash,
+                    with_tail("segmentation fault (SIGSEGV)", stderr),
+                ),
+                7 => (Status::Crash, with_tail("bus error (SIGBUS)", stderr)),
+                15 => (Status::Crash, "terminated (SIGTERM)".to_string()),
+                s => (
+                    Status::Crash,
+                    with_tail(&format!("killed by signal {s}"), stderr),
+                ),
+            };
+        }
+    }
+    if let Some(l) = alloc_failed {
+        return (Status::Oom, format!("out of memory: {}", l.trim()));
+    }
+    match status.code() {
+        Some(0) => (
+            Status::Crash,
+            with_tail("worker exited without a reply", stderr),
+        ),
+        Some(c) => (
+            Status::Crash,
+            with_tail(&format!("worker exited with code {c}"), stderr),
+        ),
+        None => (Status::Crash, with_tail("worker ended abnormally", stderr)),
+    }
+}
+
+fn with_tail(what: &str, stderr: &str) -> String {
+    let t = stderr_tail(stderr);
+    if t.is_empty() {
+        what.to_string()
+    } else {
+        format!("{what}: {t}")
+    }
+}
+
+/// Merges result files (shards, or directories holding them) into `out_dir`:
+/// `results.jsonl` with one row per key (a later file wins on duplicates, after a
+/// consistency check of the spec) and `manifest.json` combining the shard manifests.
+pub fn merge(inputs: &[PathBuf], out_dir: &Path) -> Result<MergeSummary> {
+    let mut files = Vec::new();
+    for p in inputs {
+        if p.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(p)
+                .map_err(|e| HarnessError::io(p, e))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| {
+                    f.file_name()
+                        .and_then(|n| n.to_str())
+                        .is_some_and(|n| n.starts_with("results") && n.ends_with(".jsonl"))
+                })
+                .collect();
+            found.sort();
+            files.extend(found);
+        } else if p.exists() {
+            files.push(p.clone());
+        } else {
+            return Err(HarnessError::input(format!(
+                "{}: no such file or directory",
+                p.display()
+            )));
+        }
+    }
+    if files.is_empty() {
+        return Err(HarnessError::input(
+            "merge: no results*.jsonl files in the inputs",
+        ));
+    }
+    let mut by_key: BTreeMap<String, Row> = BTreeMap::new();
+    let mut warnings = Vec::new();
+    let mut total = 0;
+    for f in &files {
+        let (rows, skipped) = read_rows(f)?;
+        warnings.extend(skipped);
+        total += rows.len();
+        for r in rows {
+            if let Some(old) = by_key.get(&r.key) {
+                if old.spec != r.spec {
+                    return Err(HarnessError::input(format!(
+                        "merge: key {} has different specs in two inputs (different code versions?)",
+                        r.key
+                    )));
+                }
+            }
+            by_key.insert(r.key.clone(), r);
+        }
+    }
+    let rows = dedupe_sorted(by_key.into_values().collect());
+    crate::error::create_dir_all(out_dir)?;
+    let out = out_dir.join("results.jsonl");
+    // Manifests: take the first, union the cells and runs of all.
+    let mut manifest: Option<Manifest> = None;
+    for f in &files {
+        let name = f.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let mname = name
+            .replacen("results", "manifest", 1)
+            .replace(".jsonl", ".json");
+        let mpath = f.with_file_name(mname);
+        if let Ok(text) = std::fs::read_to_string(&mpath) {
+            if let Ok(m) = serde_json::from_str::<Manifest>(&text) {
+                match &mut manifest {
+                    None => manifest = Some(m),
+                    Some(acc) => {
+                        acc.runs.extend(m.runs);
+                        acc.cells.extend(m.cells);
+                    }
+                }
+            }
+        }
+    }
+    if let Some(mut m) = manifest {
+        m.cells.sort_by_key(|c| c.index);
+        m.cells.dedup_by(|a, b| a.key == b.key);
+        m.shard = None;
+        let text =
+            serde_json::to_string_pretty(&m).map_err(|e| HarnessError::failure(e.to_string()))?;
+        crate::error::write_atomic(&out_dir.join("manifest.json"), text.as_bytes())?;
+    }
+    write_rows(&out, &rows)?;
+    Ok(MergeSummary {
+        inputs: files,
+        rows_read: total,
+        rows_written: rows.len(),
+        output: out,
+        warnings,
+    })
+}
+
+/// What `merge` did.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MergeSummary {
+    /// Result files read.
+    pub inputs: Vec<PathBuf>,
+    /// Rows read.
+    pub rows_read: usize,
+    /// Rows written (one per key).
+    pub rows_written: usize,
+    /// Merged results file.
+    pub output: PathBuf,
+    /// Lines skipped.
+    pub warnings: Vec<String>,
+}

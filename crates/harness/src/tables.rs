@@ -1,0 +1,350 @@
+//! Tables of aggregated results: Markdown, LaTeX (booktabs) and CSV.
+//!
+//! One table per method kind. Rows are configurations (dataset, perturbation, method);
+//! cells show `mean ± std` over seeds. The best mean of each column within a block of
+//! rows sharing dataset and perturbation (the methods compared on the same input) is
+//! bold in Markdown and LaTeX. CSV has full precision: mean, std, 95 % CI and n.
+
+use std::fmt::Write as _;
+
+use crate::aggregate::{Group, Stat};
+use crate::cell::{default_metrics, higher_is_better};
+use crate::registry::MethodKind;
+
+/// Column of method time (from `cost`).
+pub const TIME_COLUMN: &str = "method_s";
+
+/// A table for one method kind.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    /// Method kind.
+    pub kind: MethodKind,
+    /// Metric columns (the last is [`TIME_COLUMN`]).
+    pub columns: Vec<String>,
+    /// Rows.
+    pub rows: Vec<TableRow>,
+}
+
+/// One row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableRow {
+    /// Dataset label.
+    pub dataset: String,
+    /// Perturbation label.
+    pub perturb: String,
+    /// Method label.
+    pub method: String,
+    /// Ok cells.
+    pub ok: usize,
+    /// Cells.
+    pub cells: usize,
+    /// One statistic per column.
+    pub values: Vec<Option<Stat>>,
+    /// Whether the value is the best of its block.
+    pub best: Vec<bool>,
+}
+
+/// Metric columns for `kind`: the requested ones that occur, else the defaults that occur.
+pub fn columns_for(kind: MethodKind, groups: &[&Group], requested: &[String]) -> Vec<String> {
+    let present = |m: &str| groups.iter().any(|g| g.metrics.contains_key(m));
+    let from_req: Vec<String> = requested.iter().filter(|m| present(m)).cloned().collect();
+    if !from_req.is_empty() {
+        return from_req;
+    }
+    default_metrics(kind)
+        .iter()
+        .filter(|m| present(m))
+        .map(|m| (*m).to_string())
+        .collect()
+}
+
+/// Builds one table per method kind present in `groups`.
+pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
+    let mut out = Vec::new();
+    for kind in [
+        MethodKind::Normals,
+        MethodKind::Features,
+        MethodKind::Reconstruct,
+    ] {
+        let gs: Vec<&Group> = groups.iter().filter(|g| g.kind == kind).collect();
+        if gs.is_empty() {
+            continue;
+        }
+        let mut columns = columns_for(kind, &gs, requested);
+        columns.push(TIME_COLUMN.to_string());
+        let mut rows: Vec<TableRow> = gs
+            .iter()
+            .map(|g| TableRow {
+                dataset: g.labels.dataset.clone(),
+                perturb: g.labels.perturb.clone(),
+                method: g.labels.method.clone(),
+                ok: g.ok,
+                cells: g.cells,
+                values: columns
+                    .iter()
+                    .map(|c| {
+                        if c == TIME_COLUMN {
+                            g.cost.get("method_s").copied()
+                        } else {
+                            g.metrics.get(c).copied()
+                        }
+                    })
+                    .collect(),
+                best: vec![false; columns.len()],
+            })
+            .collect();
+        // Best per column within each (dataset, perturbation) block.
+        for ci in 0..columns.len() {
+            let up = higher_is_better(&columns[ci]);
+            let mut blocks: Vec<(String, String)> = rows
+                .iter()
+                .map(|r| (r.dataset.clone(), r.perturb.clone()))
+                .collect();
+            blocks.dedup();
+            for (d, p) in blocks {
+                let idx: Vec<usize> = (0..rows.len())
+                    .filter(|&i| rows[i].dataset == d && rows[i].perturb == p)
+                    .collect();
+                if idx.len() < 2 {
+                    continue;
+                }
+                let best = idx
+                    .iter()
+                    .filter_map(|&i| rows[i].values[ci].map(|s| s.mean))
+                    .fold(None, |acc: Option<f64>, x| {
+                        Some(match acc {
+                            None => x,
+                            Some(a) if (up && x > a) || (!up && x < a) => x,
+                            Some(a) => a,
+                        })
+                    });
+                if let Some(b) = best {
+                    for &i in &idx {
+                        if rows[i].values[ci].is_some_and(|s| s.mean == b) {
+                            rows[i].best[ci] = true;
+                        }
+                    }
+                }
+            }
+        }
+        out.push(Table {
+            kind,
+            columns,
+            rows,
+        });
+    }
+    out
+}
+
+/// A number with 4 significant digits.
+pub fn fmt_num(x: f64) -> String {
+    if !x.is_finite() {
+        return "–".into();
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    let a = x.abs();
+    if (1e-3..1e5).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.3e}")
+    }
+}
+
+fn cell_text(s: &Option<Stat>) -> String {
+    match s {
+        None => "–".into(),
+        Some(s) if s.n > 1 => format!("{} ± {}", fmt_num(s.mean), fmt_num(s.std)),
+        Some(s) => fmt_num(s.mean),
+    }
+}
+
+/// Column heading with its direction.
+pub fn heading(c: &str) -> String {
+    if c == TIME_COLUMN {
+        "time (s)".into()
+    } else if higher_is_better(c) {
+        format!("{c} ↑")
+    } else {
+        format!("{c} ↓")
+    }
+}
+
+/// Markdown table.
+pub fn markdown(t: &Table) -> String {
+    let mut s = String::new();
+    let _ = write!(s, "| dataset | perturbation | method | ok |");
+    for c in &t.columns {
+        let _ = write!(s, " {} |", heading(c));
+    }
+    s.push('\n');
+    s.push_str("|---|---|---|---|");
+    for _ in &t.columns {
+        s.push_str("---:|");
+    }
+    s.push('\n');
+    for r in &t.rows {
+        let _ = write!(
+            s,
+            "| {} | {} | {} | {}/{} |",
+            md_escape(&r.dataset),
+            md_escape(&r.perturb),
+            md_escape(&r.method),
+            r.ok,
+            r.cells
+        );
+        for (v, b) in r.values.iter().zip(&r.best) {
+            let text = cell_text(v);
+            if *b {
+                let _ = write!(s, " **{text}** |");
+            } else {
+                let _ = write!(s, " {text} |");
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn md_escape(s: &str) -> String {
+    s.replace('|', "\\|")
+}
+
+/// LaTeX escaping of plain text.
+pub fn tex_escape(s: &str) -> String {
+    let mut out = String::new();
+    for ch in s.chars() {
+        match ch {
+            '\\' => out.push_str("\\textbackslash{}"),
+            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
+                out.push('\\');
+                out.push(ch);
+            }
+            '~' => out.push_str("\\textasciitilde{}"),
+            '^' => out.push_str("\\textasciicircum{}"),
+            '↑' => out.push_str("$\\uparrow$"),
+            '↓' => out.push_str("$\\downarrow$"),
+            _ => out.push(ch),
+        }
+    }
+    out
+}
+
+/// LaTeX table (needs `\usepackage{booktabs}`).
+pub fn latex(t: &Table, caption: &str) -> String {
+    let mut s = String::new();
+    s.push_str("\\begin{table}[t]\n\\centering\n\\small\n");
+    let _ = writeln!(
+        s,
+        "\\begin{{tabular}}{{lll{}}}",
+        "r".repeat(t.columns.len())
+    );
+    s.push_str("\\toprule\n");
+    s.push_str("dataset & perturbation & method");
+    for c in &t.columns {
+        let _ = write!(s, " & {}", tex_escape(&heading(c)));
+    }
+    s.push_str(" \\\\\n\\midrule\n");
+    let mut last = None;
+    for r in &t.rows {
+        if last.is_some() && last != Some(&r.dataset) {
+            s.push_str("\\midrule\n");
+        }
+        last = Some(&r.dataset);
+        let _ = write!(
+            s,
+            "{} & {} & {}",
+            tex_escape(&r.dataset),
+            tex_escape(&r.perturb),
+            tex_escape(&r.method)
+        );
+        for (v, b) in r.values.iter().zip(&r.best) {
+            let text = match v {
+                None => "--".to_string(),
+                Some(st) if st.n > 1 => format!("{} $\\pm$ {}", fmt_num(st.mean), fmt_num(st.std)),
+                Some(st) => fmt_num(st.mean),
+            };
+            let text = text.replace('–', "--");
+            if *b {
+                let _ = write!(s, " & \\textbf{{{text}}}");
+            } else {
+                let _ = write!(s, " & {text}");
+            }
+        }
+        s.push_str(" \\\\\n");
+    }
+    s.push_str("\\bottomrule\n\\end{tabular}\n");
+    let _ = writeln!(s, "\\caption{{{}}}", tex_escape(caption));
+    s.push_str("\\end{table}\n");
+    s
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn csv_num(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x}")
+    } else {
+        String::new()
+    }
+}
+
+/// CSV table: full precision, `mean, std, ci95, n` per column.
+pub fn csv(t: &Table) -> String {
+    let mut s = String::from("dataset,perturbation,method,ok,cells");
+    for c in &t.columns {
+        let _ = write!(s, ",{c}_mean,{c}_std,{c}_ci95,{c}_n");
+    }
+    s.push('\n');
+    for r in &t.rows {
+        let _ = write!(
+            s,
+            "{},{},{},{},{}",
+            csv_field(&r.dataset),
+            csv_field(&r.perturb),
+            csv_field(&r.method),
+            r.ok,
+            r.cells
+        );
+        for v in &r.values {
+            match v {
+                Some(st) => {
+                    let _ = write!(
+                        s,
+                        ",{},{},{},{}",
+                        csv_num(st.mean),
+                        csv_num(st.std),
+                        csv_num(st.ci95),
+                        st.n
+                    );
+                }
+                None => s.push_str(",,,,0"),
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_and_escaping() {
+        assert_eq!(fmt_num(0.012345), "0.01235");
+        assert_eq!(fmt_num(123.456), "123.5");
+        assert_eq!(fmt_num(1.0e-6), "1.000e-6");
+        assert_eq!(fmt_num(0.0), "0");
+        assert_eq!(tex_escape("a_b & 5%"), "a\\_b \\& 5\\%");
+        assert_eq!(csv_field("a,b"), "\"a,b\"");
+    }
+}

@@ -1,0 +1,46 @@
+//! Metrics of reconbench, exactly as `METRICS.md` defines them (the user-facing copy with
+//! every formula and JSON key is `docs/METRICS.md`).
+//!
+//! * [`distance`]: accuracy, completeness, Chamfer-L1, Hausdorff, p95, RMS, F-score;
+//!   exact point-to-surface distances against a [`Reference`] (analytic shape or mesh).
+//! * [`normals`]: unoriented / oriented angle statistics, PGP5 / PGP10, flip rate.
+//! * [`features`]: sharp-feature precision / recall / F1, distance to the curves, curve
+//!   coverage, mesh feature recovery.
+//! * [`topology`]: geom's topology analysis plus Delta F, `topology_ok` and
+//!   self-intersections.
+//! * [`quality`]: triangle angles, aspect ratios, edge lengths.
+//! * [`cost`]: per-phase timer, CPU time, peak RSS.
+//! * [`eval`]: the entry points the CLI wraps (`eval_mesh`, `eval_cloud_normals`,
+//!   `eval_cloud_features`).
+//!
+//! Every report implements [`Report`]: a flat list of stable keys, serialised as a flat
+//! JSON object and convertible to a table row.
+
+pub mod cost;
+pub mod distance;
+pub mod error;
+pub mod eval;
+pub mod features;
+pub mod normals;
+pub mod quality;
+pub mod reference;
+pub mod report;
+pub mod sampling;
+pub mod stats;
+pub mod topology;
+
+mod boxtree;
+
+pub use cost::{CostReport, PhaseTimer, cpu_time_seconds, peak_rss_bytes};
+pub use distance::{DistanceEval, DistanceOptions, FScore, Sides, eval_distance};
+pub use error::{MetricsError, Result};
+pub use eval::{MeshEval, MeshEvalOptions, eval_cloud_features, eval_mesh};
+pub use features::{
+    CleanPositions, FeatureEval, FeatureOptions, MeshFeatureEval, eval_features, eval_mesh_features,
+};
+pub use normals::{NormalEval, NormalGroundTruth, NormalOptions, eval_cloud_normals, eval_normals};
+pub use quality::{QualityEval, QualityOptions, eval_quality};
+pub use reference::{Reference, SurfaceHit};
+pub use report::{Report, Value};
+pub use stats::Summary;
+pub use topology::{TopologyEval, TopologyOptions, count_self_intersections, eval_topology};

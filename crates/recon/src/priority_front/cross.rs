@@ -1,0 +1,90 @@
+//! The 2-D crossing validation of spec §4.4 Step 4 (O'Rourke's proper-intersection test
+//! in a local projection plane).
+
+use glam::DVec3;
+
+/// An orthonormal basis `(u, v)` of the plane with unit normal `n`.
+#[inline]
+pub(crate) fn plane_basis(n: DVec3) -> (DVec3, DVec3) {
+    let u = n.any_orthonormal_vector();
+    (u, n.cross(u))
+}
+
+#[inline]
+fn orient(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// Proper crossing of segments `p0p1` and `q0q1` (touching or collinear overlap is not
+/// proper).
+#[inline]
+fn proper(p0: [f64; 2], p1: [f64; 2], q0: [f64; 2], q1: [f64; 2]) -> bool {
+    let d1 = orient(p0, p1, q0);
+    let d2 = orient(p0, p1, q1);
+    if !((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) {
+        return false;
+    }
+    let d3 = orient(q0, q1, p0);
+    let d4 = orient(q0, q1, p1);
+    (d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0)
+}
+
+/// True when a tentative edge of `new_edges` properly crosses a front edge of `xs` in
+/// the plane through `o` with unit normal `n`. Front edges sharing an endpoint with the
+/// tentative edge are skipped, and so are those with both endpoints farther than `r`
+/// from the plane (another sheet).
+pub(crate) fn crosses(
+    pts: &[DVec3],
+    xs: &[(u32, u32)],
+    n: DVec3,
+    o: DVec3,
+    r: f64,
+    new_edges: &[(u32, u32)],
+) -> bool {
+    if xs.is_empty() {
+        return false;
+    }
+    let (u, v) = plane_basis(n);
+    let proj = |i: u32| {
+        let q = pts[i as usize] - o;
+        [q.dot(u), q.dot(v)]
+    };
+    for &(s0, s1) in new_edges {
+        let (p0, p1) = (proj(s0), proj(s1));
+        for &(x, y) in xs {
+            if x == s0 || x == s1 || y == s0 || y == s1 {
+                continue;
+            }
+            let (px, py) = (pts[x as usize], pts[y as usize]);
+            if (px - o).dot(n).abs() > r && (py - o).dot(n).abs() > r {
+                continue;
+            }
+            if proper(p0, p1, proj(x), proj(y)) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// True when `q` lies strictly inside the 2-D triangle `tri` (either orientation).
+pub(crate) fn inside_2d(tri: [[f64; 2]; 3], q: [f64; 2]) -> bool {
+    let d0 = orient(tri[0], tri[1], q);
+    let d1 = orient(tri[1], tri[2], q);
+    let d2 = orient(tri[2], tri[0], q);
+    (d0 > 0.0 && d1 > 0.0 && d2 > 0.0) || (d0 < 0.0 && d1 < 0.0 && d2 < 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn proper_crossing_and_touching() {
+        assert!(proper([0.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 0.0]));
+        assert!(!proper([0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [2.0, 1.0]));
+        assert!(!proper([0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [3.0, 0.0]));
+        assert!(inside_2d([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [0.2, 0.2]));
+        assert!(!inside_2d([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [0.5, 0.5]));
+    }
+}

@@ -1,0 +1,422 @@
+//! Static uniform grid over the points (the paper's hash grid, spec §3.2) and a dynamic
+//! index of front vertices.
+//!
+//! The points are reordered by cell so that every cell is a contiguous index range (CSR):
+//! ball queries then read memory sequentially. Cells are addressed densely when the box
+//! holds few enough cells, otherwise through a hash map of the occupied cells.
+
+use std::collections::HashMap;
+use std::ops::Range;
+
+use glam::DVec3;
+
+/// "No element" marker for u32 links.
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Largest per-axis cell count (coordinates are packed in 21 bits for hashing).
+const MAX_DIM: i64 = (1 << 21) - 2;
+
+/// Cell geometry shared by [`Grid`] and [`FrontIndex`].
+#[derive(Debug, Clone)]
+pub(crate) struct Lattice {
+    origin: DVec3,
+    h: f64,
+    inv_h: f64,
+    dims: [i64; 3],
+}
+
+impl Lattice {
+    /// A lattice of cell edge about `h` over the box `[lo, hi]`; `h` is enlarged when the
+    /// box would need more than `MAX_DIM` cells along an axis.
+    pub fn new(lo: DVec3, hi: DVec3, h: f64) -> Self {
+        let ext = (hi - lo).max(DVec3::ZERO);
+        let mut h = if h.is_finite() && h > 0.0 {
+            h
+        } else {
+            ext.max_element().max(1.0)
+        };
+        let longest = ext.max_element();
+        if longest / h > MAX_DIM as f64 {
+            h = longest / MAX_DIM as f64 * 1.000_001;
+        }
+        let d = |e: f64| ((e / h).floor() as i64 + 1).clamp(1, MAX_DIM);
+        Self {
+            origin: lo,
+            h,
+            inv_h: 1.0 / h,
+            dims: [d(ext.x), d(ext.y), d(ext.z)],
+        }
+    }
+
+    /// Cell edge.
+    pub fn h(&self) -> f64 {
+        self.h
+    }
+
+    /// Number of cells of the box.
+    pub fn n_cells(&self) -> u128 {
+        self.dims.iter().map(|&d| d as u128).product()
+    }
+
+    #[inline]
+    fn coord(&self, x: f64, axis: usize) -> i64 {
+        let c = ((x - self.origin[axis]) * self.inv_h).floor();
+        // NaN-free by construction (finite inputs); clamp keeps far query points sane.
+        (c.clamp(-1.0, (self.dims[axis]) as f64) as i64).clamp(0, self.dims[axis] - 1)
+    }
+
+    /// Cell coordinates of `p` (clamped into the box).
+    #[inline]
+    pub fn coords(&self, p: DVec3) -> [i64; 3] {
+        [self.coord(p.x, 0), self.coord(p.y, 1), self.coord(p.z, 2)]
+    }
+
+    /// Inclusive coordinate ranges of the cells meeting the cube `[o - r, o + r]`, or
+    /// `None` when the cube misses the box.
+    #[inline]
+    pub fn cube(&self, o: DVec3, r: f64) -> Option<[[i64; 2]; 3]> {
+        let mut out = [[0i64; 2]; 3];
+        for a in 0..3 {
+            let lo = ((o[a] - r - self.origin[a]) * self.inv_h).floor();
+            let hi = ((o[a] + r - self.origin[a]) * self.inv_h).floor();
+            if hi < 0.0 || lo > (self.dims[a] - 1) as f64 {
+                return None;
+            }
+            out[a] = [lo.max(0.0) as i64, hi.min((self.dims[a] - 1) as f64) as i64];
+        }
+        Some(out)
+    }
+
+    #[inline]
+    fn linear(&self, c: [i64; 3]) -> u64 {
+        (c[0] + self.dims[0] * (c[1] + self.dims[1] * c[2])) as u64
+    }
+
+    #[inline]
+    fn key(c: [i64; 3]) -> u64 {
+        (c[0] as u64) | ((c[1] as u64) << 21) | ((c[2] as u64) << 42)
+    }
+}
+
+/// Cell addressing: dense linear index or hash of occupied cells.
+#[derive(Debug, Clone)]
+enum Addr {
+    Dense,
+    Sparse(HashMap<u64, u32>),
+}
+
+/// The static point grid. Point `i` of the grid is point `order[i]` of the input.
+#[derive(Debug, Clone)]
+pub(crate) struct Grid {
+    pub lat: Lattice,
+    addr: Addr,
+    /// CSR: cell `c` holds grid points `starts[c]..starts[c + 1]`.
+    starts: Vec<u32>,
+}
+
+impl Grid {
+    /// Builds the grid with cell edge `h` over `pts`; returns it with the permutation
+    /// `order` (grid index -> input index). Dense addressing is used up to
+    /// `8 n + 65536` cells.
+    pub fn build(pts: &[DVec3], h: f64) -> (Grid, Vec<u32>) {
+        let (lo, hi) = bounds(pts);
+        let lat = Lattice::new(lo, hi, h);
+        let n = pts.len();
+        let dense = lat.n_cells() <= (8 * n as u128 + 65_536);
+        if dense {
+            let nc = lat.n_cells() as usize;
+            let cells: Vec<u32> = pts
+                .iter()
+                .map(|&p| lat.linear(lat.coords(p)) as u32)
+                .collect();
+            let mut starts = vec![0u32; nc + 1];
+            for &c in &cells {
+                starts[c as usize + 1] += 1;
+            }
+            for c in 0..nc {
+                starts[c + 1] += starts[c];
+            }
+            let mut fill = starts.clone();
+            let mut order = vec![0u32; n];
+            for (i, &c) in cells.iter().enumerate() {
+                let slot = fill[c as usize] as usize;
+                fill[c as usize] += 1;
+                order[slot] = i as u32;
+            }
+            (
+                Grid {
+                    lat,
+                    addr: Addr::Dense,
+                    starts,
+                },
+                order,
+            )
+        } else {
+            let mut keyed: Vec<(u64, u32)> = pts
+                .iter()
+                .enumerate()
+                .map(|(i, &p)| (Lattice::key(lat.coords(p)), i as u32))
+                .collect();
+            keyed.sort_unstable();
+            let mut map = HashMap::new();
+            let mut starts = Vec::new();
+            let mut order = Vec::with_capacity(n);
+            let mut prev = u64::MAX;
+            for (slot, &(k, i)) in keyed.iter().enumerate() {
+                if k != prev {
+                    map.insert(k, starts.len() as u32);
+                    starts.push(slot as u32);
+                    prev = k;
+                }
+                order.push(i);
+            }
+            starts.push(n as u32);
+            (
+                Grid {
+                    lat,
+                    addr: Addr::Sparse(map),
+                    starts,
+                },
+                order,
+            )
+        }
+    }
+
+    /// Number of addressable cells.
+    pub fn n_cells(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// Grid points of cell `c`.
+    #[inline]
+    pub fn range(&self, c: u32) -> Range<usize> {
+        self.starts[c as usize] as usize..self.starts[c as usize + 1] as usize
+    }
+
+    #[inline]
+    fn cell_at(&self, c: [i64; 3]) -> Option<u32> {
+        match &self.addr {
+            Addr::Dense => Some(self.lat.linear(c) as u32),
+            Addr::Sparse(m) => m.get(&Lattice::key(c)).copied(),
+        }
+    }
+
+    /// Calls `f` with every non-empty cell meeting the cube `[o - r, o + r]`.
+    #[inline]
+    pub fn for_cells(&self, o: DVec3, r: f64, mut f: impl FnMut(Range<usize>)) {
+        let Some(q) = self.lat.cube(o, r) else {
+            return;
+        };
+        for z in q[2][0]..=q[2][1] {
+            for y in q[1][0]..=q[1][1] {
+                match &self.addr {
+                    Addr::Dense => {
+                        // Cells of one row are contiguous: one CSR span.
+                        let c0 = self.lat.linear([q[0][0], y, z]) as usize;
+                        let c1 = self.lat.linear([q[0][1], y, z]) as usize;
+                        let s = self.starts[c0] as usize;
+                        let e = self.starts[c1 + 1] as usize;
+                        if s < e {
+                            f(s..e);
+                        }
+                    }
+                    Addr::Sparse(_) => {
+                        for x in q[0][0]..=q[0][1] {
+                            if let Some(c) = self.cell_at([x, y, z]) {
+                                f(self.range(c));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Calls `f` with the cells of the cube shell of Chebyshev radius `level` around the
+    /// cell of `o` (level 0 = that cell). Returns false when the cube of radius
+    /// `level - 1` already covered the whole box (nothing left to visit).
+    pub fn for_shell(&self, o: DVec3, level: i64, mut f: impl FnMut(Range<usize>)) -> bool {
+        let c = self.lat.coords(o);
+        let d = self.lat.dims;
+        let l = level;
+        if l > 0 && (0..3).all(|a| c[a] - (l - 1) <= 0 && c[a] + (l - 1) >= d[a] - 1) {
+            return false;
+        }
+        for z in (c[2] - l).max(0)..=(c[2] + l).min(d[2] - 1) {
+            for y in (c[1] - l).max(0)..=(c[1] + l).min(d[1] - 1) {
+                let full_row = (z - c[2]).abs() == l || (y - c[1]).abs() == l;
+                if full_row {
+                    for x in (c[0] - l).max(0)..=(c[0] + l).min(d[0] - 1) {
+                        if let Some(cell) = self.cell_at([x, y, z]) {
+                            f(self.range(cell));
+                        }
+                    }
+                } else {
+                    for x in [c[0] - l, c[0] + l] {
+                        if x >= 0
+                            && x < d[0]
+                            && let Some(cell) = self.cell_at([x, y, z])
+                        {
+                            f(self.range(cell));
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// Distance from `o` to the outside of the cube of cells of Chebyshev radius `level`
+    /// around `o`'s cell: every point closer than this lies in shells `0..=level`.
+    pub fn covered(&self, o: DVec3, level: i64) -> f64 {
+        let c = self.lat.coords(o);
+        let mut m = f64::INFINITY;
+        for a in 0..3 {
+            let lo = self.lat.origin[a] + (c[a] - level) as f64 * self.lat.h;
+            let hi = self.lat.origin[a] + (c[a] + level + 1) as f64 * self.lat.h;
+            m = m.min(o[a] - lo).min(hi - o[a]);
+        }
+        m.max(0.0)
+    }
+}
+
+/// Axis-aligned bounds of `pts` (a unit box at the origin for an empty slice).
+pub(crate) fn bounds(pts: &[DVec3]) -> (DVec3, DVec3) {
+    if pts.is_empty() {
+        return (DVec3::ZERO, DVec3::ONE);
+    }
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for &p in pts {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    (lo, hi)
+}
+
+/// Front vertices bucketed by a coarser lattice (cell edge `2 h`), as intrusive doubly
+/// linked lists: O(1) insert and remove, no allocation after construction (dense case).
+#[derive(Debug, Clone)]
+pub(crate) struct FrontIndex {
+    lat: Lattice,
+    dense: bool,
+    heads: Vec<u32>,
+    sparse: HashMap<u64, u32>,
+    next: Vec<u32>,
+    prev: Vec<u32>,
+    /// Bucket of each listed point (`u64::MAX` when not listed).
+    bucket: Vec<u64>,
+}
+
+impl FrontIndex {
+    /// An empty index for `n` points over the box of `grid`.
+    pub fn new(grid: &Grid, n: usize, cell: f64) -> Self {
+        let lo = grid.lat.origin;
+        let hi = lo
+            + DVec3::new(
+                grid.lat.dims[0] as f64,
+                grid.lat.dims[1] as f64,
+                grid.lat.dims[2] as f64,
+            ) * grid.lat.h;
+        let lat = Lattice::new(lo, hi, cell);
+        let dense = lat.n_cells() <= (2 * n as u128 + 65_536);
+        let heads = if dense {
+            vec![NONE; lat.n_cells() as usize]
+        } else {
+            Vec::new()
+        };
+        Self {
+            lat,
+            dense,
+            heads,
+            sparse: HashMap::new(),
+            next: vec![NONE; n],
+            prev: vec![NONE; n],
+            bucket: vec![u64::MAX; n],
+        }
+    }
+
+    #[inline]
+    fn bucket_of(&self, c: [i64; 3]) -> u64 {
+        if self.dense {
+            self.lat.linear(c)
+        } else {
+            Lattice::key(c)
+        }
+    }
+
+    #[inline]
+    fn head(&self, b: u64) -> u32 {
+        if self.dense {
+            self.heads[b as usize]
+        } else {
+            self.sparse.get(&b).copied().unwrap_or(NONE)
+        }
+    }
+
+    #[inline]
+    fn set_head(&mut self, b: u64, v: u32) {
+        if self.dense {
+            self.heads[b as usize] = v;
+        } else if v == NONE {
+            self.sparse.remove(&b);
+        } else {
+            self.sparse.insert(b, v);
+        }
+    }
+
+    /// Lists point `i` at position `p` (no-op when already listed).
+    pub fn insert(&mut self, i: u32, p: DVec3) {
+        if self.bucket[i as usize] != u64::MAX {
+            return;
+        }
+        let b = self.bucket_of(self.lat.coords(p));
+        let h = self.head(b);
+        self.next[i as usize] = h;
+        self.prev[i as usize] = NONE;
+        if h != NONE {
+            self.prev[h as usize] = i;
+        }
+        self.set_head(b, i);
+        self.bucket[i as usize] = b;
+    }
+
+    /// Unlists point `i` (no-op when not listed).
+    pub fn remove(&mut self, i: u32) {
+        let b = self.bucket[i as usize];
+        if b == u64::MAX {
+            return;
+        }
+        let (n, p) = (self.next[i as usize], self.prev[i as usize]);
+        if p != NONE {
+            self.next[p as usize] = n;
+        } else {
+            self.set_head(b, n);
+        }
+        if n != NONE {
+            self.prev[n as usize] = p;
+        }
+        self.bucket[i as usize] = u64::MAX;
+        self.next[i as usize] = NONE;
+        self.prev[i as usize] = NONE;
+    }
+
+    /// Calls `f` with every listed point in the buckets meeting the cube `[o - r, o + r]`.
+    #[inline]
+    pub fn for_near(&self, o: DVec3, r: f64, mut f: impl FnMut(u32)) {
+        let Some(q) = self.lat.cube(o, r) else {
+            return;
+        };
+        for z in q[2][0]..=q[2][1] {
+            for y in q[1][0]..=q[1][1] {
+                for x in q[0][0]..=q[0][1] {
+                    let mut v = self.head(self.bucket_of([x, y, z]));
+                    while v != NONE {
+                        f(v);
+                        v = self.next[v as usize];
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,480 @@
+//! Growth state (spec §3): point states, front loops of directed edges, the edge heap,
+//! the triangle list, and the topological operations JOIN / FILL / LINK / GLUE (§4.5).
+//!
+//! Invariants kept by construction:
+//! * every front edge `a -> b` has exactly one incident triangle, which traverses
+//!   `a -> b`; a new triangle on it is stored `(a, t, b)` (opposite direction);
+//! * every front vertex has exactly one incoming and one outgoing front edge (`fin`,
+//!   `fout`), so its triangles form one fan;
+//! * no triangle is added whose edge already exists unless the operation consumes that
+//!   edge as a front edge (checked by the caller with [`Adjacency::has`]).
+//!
+//! Hence every mesh edge has at most two faces, every vertex link is a single fan, and
+//! neighbouring triangles are oriented consistently.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use glam::DVec3;
+
+use super::adjacency::Adjacency;
+use super::grid::{FrontIndex, Grid, NONE};
+
+/// Point state `Free` (spec §3.1; the transient `Close` state is the candidate buffer).
+pub(crate) const FREE: u8 = 0;
+/// Point state `Accepted` (a mesh vertex; a front point when it has front edges).
+pub(crate) const ACCEPTED: u8 = 1;
+/// Point state `Refused` (noise; also exact duplicates from the start).
+pub(crate) const REFUSED: u8 = 2;
+
+/// Resolved numeric configuration of one growth.
+#[derive(Debug, Clone)]
+pub(crate) struct Cfg {
+    /// Candidate ball radius R.
+    pub r: f64,
+    pub cos_alpha: f64,
+    pub cos_beta: f64,
+    pub w: [f64; 3],
+    pub seg_dist: bool,
+    pub apex_rule: bool,
+    pub link_prev: bool,
+    pub glue_mirror: bool,
+    /// Crossing-test radius, in units of R.
+    pub cross_factor: f64,
+    pub reject_free_inside: bool,
+    pub fill_any_angle: bool,
+    pub sector_check: bool,
+    pub revisit_passes: u32,
+}
+
+/// Operation counters (diagnostics).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Stats {
+    pub pops: u64,
+    pub boundary_pops: u64,
+    pub joins: u64,
+    pub fills: u64,
+    pub link_next: u64,
+    pub link_prev: u64,
+    pub glues: u64,
+    pub glue_mirrors: u64,
+    pub glue_rejects: u64,
+    pub cross_rejects: u64,
+    pub seeds: u64,
+    pub fail_rules: u64,
+    pub sector_rejects: u64,
+}
+
+impl Stats {
+    pub fn add(&mut self, o: &Stats) {
+        self.pops += o.pops;
+        self.boundary_pops += o.boundary_pops;
+        self.joins += o.joins;
+        self.fills += o.fills;
+        self.link_next += o.link_next;
+        self.link_prev += o.link_prev;
+        self.glues += o.glues;
+        self.glue_mirrors += o.glue_mirrors;
+        self.glue_rejects += o.glue_rejects;
+        self.cross_rejects += o.cross_rejects;
+        self.seeds += o.seeds;
+        self.fail_rules += o.fail_rules;
+        self.sector_rejects += o.sector_rejects;
+    }
+}
+
+/// A candidate (spec §4.4 Steps 1-3).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Cand {
+    pub t: u32,
+    pub score: f64,
+    pub n_new: DVec3,
+}
+
+/// Heap entry: (cost bits, FIFO counter, edge, stamp), smallest first.
+type HeapItem = Reverse<(u64, u64, u32, u32)>;
+
+/// The growth state over the points of one grid (grid order).
+#[derive(Debug)]
+pub(crate) struct Mesher<'g> {
+    pub pts: &'g [DVec3],
+    pub grid: &'g Grid,
+    pub cfg: Cfg,
+    pub state: Vec<u8>,
+    pub fin: Vec<u32>,
+    pub fout: Vec<u32>,
+    // Front edges, slot arrays (slots of dead edges are recycled; the stamp tells stale
+    // heap entries apart).
+    pub e_a: Vec<u32>,
+    pub e_b: Vec<u32>,
+    pub e_prev: Vec<u32>,
+    pub e_next: Vec<u32>,
+    pub e_stamp: Vec<u32>,
+    pub e_alive: Vec<bool>,
+    pub e_nrm: Vec<DVec3>,
+    pub e_cost: Vec<f64>,
+    free_slots: Vec<u32>,
+    heap: BinaryHeap<HeapItem>,
+    fifo: u64,
+    pub tris: Vec<[u32; 3]>,
+    pub adj: Adjacency,
+    pub fidx: FrontIndex,
+    pub cand: Vec<Cand>,
+    pub free_near: Vec<u32>,
+    pub xs: Vec<(u32, u32)>,
+    pub stats: Stats,
+    /// True during the revisit passes (IMPL-CHOICE I2/I3).
+    pub revisiting: bool,
+}
+
+/// Unit normal of the triangle `(p0, p1, p2)`, `n = (p1 - p0) x (p2 - p0)` normalised
+/// (zero for a degenerate triangle).
+#[inline]
+pub(crate) fn tri_normal(p0: DVec3, p1: DVec3, p2: DVec3) -> DVec3 {
+    (p1 - p0).cross(p2 - p0).normalize_or_zero()
+}
+
+/// Edge cost T = 1 - cos(normal change), Eq. (1), clamped to [0, 2].
+#[inline]
+pub(crate) fn cost(n_new: DVec3, n_old: DVec3) -> f64 {
+    (1.0 - n_new.dot(n_old)).clamp(0.0, 2.0)
+}
+
+impl<'g> Mesher<'g> {
+    /// A fresh state: every point Free except those in `refused`.
+    pub fn new(pts: &'g [DVec3], grid: &'g Grid, cfg: Cfg, refused: &[bool]) -> Self {
+        let n = pts.len();
+        let state = (0..n)
+            .map(|i| if refused[i] { REFUSED } else { FREE })
+            .collect();
+        let fidx = FrontIndex::new(grid, n, 2.0 * grid.lat.h());
+        Self {
+            pts,
+            grid,
+            cfg,
+            state,
+            fin: vec![NONE; n],
+            fout: vec![NONE; n],
+            e_a: Vec::new(),
+            e_b: Vec::new(),
+            e_prev: Vec::new(),
+            e_next: Vec::new(),
+            e_stamp: Vec::new(),
+            e_alive: Vec::new(),
+            e_nrm: Vec::new(),
+            e_cost: Vec::new(),
+            free_slots: Vec::new(),
+            heap: BinaryHeap::new(),
+            fifo: 0,
+            tris: Vec::new(),
+            adj: Adjacency::new(n),
+            fidx,
+            cand: Vec::new(),
+            free_near: Vec::new(),
+            xs: Vec::new(),
+            stats: Stats::default(),
+            revisiting: false,
+        }
+    }
+
+    /// True when `v` has front edges.
+    #[inline]
+    pub fn is_front(&self, v: u32) -> bool {
+        self.fout[v as usize] != NONE
+    }
+
+    /// Pushes live edge `e` onto the heap with cost `t`.
+    // ASSUMPTION A3: ties of T are broken by a FIFO insertion counter (determinism).
+    pub fn push(&mut self, e: u32, t: f64) {
+        self.fifo += 1;
+        let bits = t.max(0.0).to_bits();
+        self.heap
+            .push(Reverse((bits, self.fifo, e, self.e_stamp[e as usize])));
+    }
+
+    /// Pops the cheapest live edge (lazy deletion: stale entries are skipped).
+    pub fn pop(&mut self) -> Option<u32> {
+        while let Some(Reverse((_, _, e, stamp))) = self.heap.pop() {
+            if self.e_alive[e as usize] && self.e_stamp[e as usize] == stamp {
+                return Some(e);
+            }
+        }
+        None
+    }
+
+    /// True when no entry (live or stale) is queued.
+    pub fn heap_is_empty(&self) -> bool {
+        self.heap.is_empty()
+    }
+
+    /// Pushes every live front edge again (multi-seed / slab stitching).
+    pub fn repush_all(&mut self) {
+        self.heap.clear();
+        for e in 0..self.e_a.len() as u32 {
+            if self.e_alive[e as usize] {
+                let t = self.e_cost[e as usize];
+                self.push(e, t);
+            }
+        }
+    }
+
+    /// Creates front edge `a -> b` whose incident triangle has unit normal `nrm`; it is
+    /// not linked into a loop yet.
+    fn new_edge(&mut self, a: u32, b: u32, nrm: DVec3, t: f64, push: bool) -> u32 {
+        let e = if let Some(e) = self.free_slots.pop() {
+            let i = e as usize;
+            self.e_a[i] = a;
+            self.e_b[i] = b;
+            self.e_prev[i] = NONE;
+            self.e_next[i] = NONE;
+            self.e_alive[i] = true;
+            self.e_nrm[i] = nrm;
+            self.e_cost[i] = t;
+            e
+        } else {
+            self.e_a.push(a);
+            self.e_b.push(b);
+            self.e_prev.push(NONE);
+            self.e_next.push(NONE);
+            self.e_stamp.push(0);
+            self.e_alive.push(true);
+            self.e_nrm.push(nrm);
+            self.e_cost.push(t);
+            (self.e_a.len() - 1) as u32
+        };
+        self.fout[a as usize] = e;
+        self.fin[b as usize] = e;
+        if push {
+            self.push(e, t);
+        }
+        e
+    }
+
+    fn kill_edge(&mut self, e: u32) {
+        let i = e as usize;
+        debug_assert!(self.e_alive[i]);
+        self.e_alive[i] = false;
+        self.e_stamp[i] = self.e_stamp[i].wrapping_add(1);
+        let (a, b) = (self.e_a[i], self.e_b[i]);
+        if self.fout[a as usize] == e {
+            self.fout[a as usize] = NONE;
+        }
+        if self.fin[b as usize] == e {
+            self.fin[b as usize] = NONE;
+        }
+        self.free_slots.push(e);
+    }
+
+    #[inline]
+    fn link(&mut self, e: u32, f: u32) {
+        self.e_next[e as usize] = f;
+        self.e_prev[f as usize] = e;
+    }
+
+    /// Removes `v` from the front bookkeeping when it has no front edge left.
+    fn retire_if_interior(&mut self, v: u32) {
+        if self.fin[v as usize] == NONE && self.fout[v as usize] == NONE {
+            self.fidx.remove(v);
+            self.adj.release(v);
+        }
+    }
+
+    /// Registers the seed triangle `(v0, v1, v2)` as a 3-edge loop with T = 0.
+    pub fn add_seed(&mut self, v: [u32; 3]) {
+        let p = v.map(|i| self.pts[i as usize]);
+        let n = tri_normal(p[0], p[1], p[2]);
+        self.tris.push(v);
+        for k in 0..3 {
+            self.state[v[k] as usize] = ACCEPTED;
+            self.fidx.insert(v[k], p[k]);
+        }
+        self.adj.add(v[0], v[1]);
+        self.adj.add(v[1], v[2]);
+        self.adj.add(v[2], v[0]);
+        let e0 = self.new_edge(v[0], v[1], n, 0.0, true);
+        let e1 = self.new_edge(v[1], v[2], n, 0.0, true);
+        let e2 = self.new_edge(v[2], v[0], n, 0.0, true);
+        self.link(e0, e1);
+        self.link(e1, e2);
+        self.link(e2, e0);
+        self.stats.seeds += 1;
+    }
+
+    /// JOIN (§4.5.1): `p` was Free.
+    pub fn join(&mut self, e: u32, p: u32, n_new: DVec3) {
+        let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
+        let t = cost(n_new, self.e_nrm[e as usize]);
+        let (zp, bn) = (self.e_prev[e as usize], self.e_next[e as usize]);
+        self.tris.push([a, p, b]);
+        self.state[p as usize] = ACCEPTED;
+        self.fidx.insert(p, self.pts[p as usize]);
+        self.adj.add(a, p);
+        self.adj.add(p, b);
+        self.kill_edge(e);
+        // ASSUMPTION A18: both new edges get the bend across the consumed edge.
+        let e1 = self.new_edge(a, p, n_new, t, true);
+        let e2 = self.new_edge(p, b, n_new, t, true);
+        self.link(zp, e1);
+        self.link(e1, e2);
+        self.link(e2, bn);
+        self.stats.joins += 1;
+    }
+
+    /// FILL (§4.5.2): the loop is the triangle `a -> b -> p -> a`.
+    pub fn fill(&mut self, e: u32, p: u32) {
+        let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
+        let bp = self.fout[b as usize];
+        let pa = self.fout[p as usize];
+        self.tris.push([a, p, b]);
+        self.kill_edge(e);
+        self.kill_edge(bp);
+        self.kill_edge(pa);
+        for v in [a, b, p] {
+            self.retire_if_interior(v);
+        }
+        self.stats.fills += 1;
+    }
+
+    /// LINK-next (§4.5.3): `b -> p` is a front edge.
+    pub fn link_next(&mut self, e: u32, p: u32, n_new: DVec3) {
+        let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
+        let t = cost(n_new, self.e_nrm[e as usize]);
+        let f = self.fout[b as usize];
+        let (zp, pn) = (self.e_prev[e as usize], self.e_next[f as usize]);
+        self.tris.push([a, p, b]);
+        self.adj.add(a, p);
+        self.kill_edge(e);
+        self.kill_edge(f);
+        let e1 = self.new_edge(a, p, n_new, t, true);
+        self.link(zp, e1);
+        self.link(e1, pn);
+        self.retire_if_interior(b);
+        self.stats.link_next += 1;
+    }
+
+    /// LINK-prev (§4.5.3, ASSUMPTION A16 — the mirror of the paper's link): `p -> a` is
+    /// a front edge.
+    pub fn link_prev(&mut self, e: u32, p: u32, n_new: DVec3) {
+        let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
+        let t = cost(n_new, self.e_nrm[e as usize]);
+        let g = self.fin[a as usize];
+        let (zp, bn) = (self.e_prev[g as usize], self.e_next[e as usize]);
+        self.tris.push([a, p, b]);
+        self.adj.add(p, b);
+        self.kill_edge(g);
+        self.kill_edge(e);
+        let e1 = self.new_edge(p, b, n_new, t, true);
+        self.link(zp, e1);
+        self.link(e1, bn);
+        self.retire_if_interior(a);
+        self.stats.link_prev += 1;
+    }
+
+    /// GLUE (§4.5.4) with the repair triangle `(p, q, b)`, `q -> p` the front
+    /// predecessor edge of `p`; `n2` is the repair triangle's normal.
+    pub fn glue(&mut self, e: u32, p: u32, n_new: DVec3, n2: DVec3) {
+        let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
+        let t1 = cost(n_new, self.e_nrm[e as usize]);
+        let g = self.fin[p as usize];
+        let q = self.e_a[g as usize];
+        let t2 = cost(n2, self.e_nrm[g as usize]);
+        let (zp, bn) = (self.e_prev[e as usize], self.e_next[e as usize]);
+        let (qprev, py) = (self.e_prev[g as usize], self.e_next[g as usize]);
+        self.tris.push([a, p, b]);
+        self.tris.push([p, q, b]);
+        self.adj.add(a, p);
+        self.adj.add(p, b);
+        self.adj.add(q, b);
+        self.kill_edge(e);
+        self.kill_edge(g);
+        let e1 = self.new_edge(a, p, n_new, t1, true);
+        let e2 = self.new_edge(q, b, n2, t2, true);
+        self.link(zp, e1);
+        self.link(e1, py);
+        self.link(qprev, e2);
+        self.link(e2, bn);
+        self.stats.glues += 1;
+    }
+
+    /// Mirrored GLUE repair (ASSUMPTION A17): second triangle `(a, y, p)`, `p -> y` the
+    /// front successor edge of `p`; `n2` is its normal.
+    pub fn glue_mirror(&mut self, e: u32, p: u32, n_new: DVec3, n2: DVec3) {
+        let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
+        let t1 = cost(n_new, self.e_nrm[e as usize]);
+        let h = self.fout[p as usize];
+        let y = self.e_b[h as usize];
+        let t2 = cost(n2, self.e_nrm[h as usize]);
+        let (zp, bn) = (self.e_prev[e as usize], self.e_next[e as usize]);
+        let (qp, ys) = (self.e_prev[h as usize], self.e_next[h as usize]);
+        self.tris.push([a, p, b]);
+        self.tris.push([a, y, p]);
+        self.adj.add(a, p);
+        self.adj.add(p, b);
+        self.adj.add(a, y);
+        self.kill_edge(e);
+        self.kill_edge(h);
+        let e1 = self.new_edge(a, y, n2, t2, true);
+        let e2 = self.new_edge(p, b, n_new, t1, true);
+        self.link(zp, e1);
+        self.link(e1, ys);
+        self.link(qp, e2);
+        self.link(e2, bn);
+        self.stats.glue_mirrors += 1;
+    }
+
+    /// Live front loops as vertex cycles (hole / boundary report), in a deterministic
+    /// order (by lowest edge slot).
+    pub fn loops(&self) -> Vec<Vec<u32>> {
+        let mut seen = vec![false; self.e_a.len()];
+        let mut out = Vec::new();
+        for e0 in 0..self.e_a.len() {
+            if !self.e_alive[e0] || seen[e0] {
+                continue;
+            }
+            let mut l = Vec::new();
+            let mut e = e0;
+            while !seen[e] {
+                seen[e] = true;
+                l.push(self.e_a[e]);
+                e = self.e_next[e] as usize;
+                if e == NONE as usize || l.len() > self.e_a.len() {
+                    break;
+                }
+            }
+            out.push(l);
+        }
+        out
+    }
+
+    /// Rebuilds a state from a finished sub-run: triangles, accepted points and live
+    /// front loops given as `(a, b, next-index-in-list, normal, cost)`; `a`, `b` are
+    /// indices of this mesher's points.
+    pub fn import(
+        &mut self,
+        tris: &[[u32; 3]],
+        accepted: &[u32],
+        edges: &[(u32, u32, u32, DVec3, f64)],
+    ) {
+        self.tris.extend_from_slice(tris);
+        for &v in accepted {
+            self.state[v as usize] = ACCEPTED;
+        }
+        let base = self.e_a.len() as u32;
+        for &(a, b, _, nrm, t) in edges {
+            self.new_edge(a, b, nrm, t, false);
+            self.fidx.insert(a, self.pts[a as usize]);
+        }
+        for (k, &(_, _, nx, _, _)) in edges.iter().enumerate() {
+            self.link(base + k as u32, base + nx);
+        }
+        // Adjacency of front vertices: every triangle edge joining two front vertices.
+        for tri in tris {
+            for k in 0..3 {
+                let (u, v) = (tri[k], tri[(k + 1) % 3]);
+                if self.is_front(u) && self.is_front(v) && !self.adj.has(u, v) {
+                    self.adj.add(u, v);
+                }
+            }
+        }
+    }
+}

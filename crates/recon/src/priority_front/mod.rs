@@ -1,0 +1,336 @@
+//! `priority-front`: Li, Han & Wee, "On Surface Reconstruction: A Priority Driven
+//! Approach", CAD 41(9), 2009 (spec `shared/spec/001_priority_driven.md`).
+//!
+//! An interpolating advancing-front mesher. From a seed triangle in the flattest of a few
+//! random patches, front edges are popped from a min-heap keyed by the bend cost
+//! T = 1 - cos(normal change) (flat regions first). For each edge the Free and front
+//! points within R = kρ of its midpoint are filtered by the angle bound α_max = 120° and
+//! the normal-change bound β_max = 90°, ranked by the score
+//! C = w1 cos β + w2 cos γ + w3 (R - d)/R, and validated by a 2-D crossing test; the
+//! winner is joined, filled, linked or glued into the front. Restarts seed the Free
+//! patches left; points never used are refused as noise.
+//!
+//! Output: a consistently oriented manifold mesh whose vertices are the input points
+//! (refused points are unreferenced vertices), the refused indices, and diagnostics
+//! (holes as boundary loops, operation counts, timings). See
+//! `docs/methods/priority_front.md`.
+//!
+//! Files: [`params`] (parameters), `grid` (hash grid, front-vertex index), `density`
+//! (ρ, duplicates, exact neighbour search), `seed` (§4.2), `mesher` (state and the four
+//! operations), `triangulate` (§4.4 and the main loop), `cross` (2-D crossing test),
+//! `adjacency` (edge map of front vertices), `run` (restarts), `parallel` (slabs).
+
+mod adjacency;
+mod cross;
+mod density;
+mod grid;
+mod mesher;
+mod parallel;
+pub mod params;
+mod run;
+mod seed;
+mod triangulate;
+
+use std::time::Instant;
+
+use glam::DVec3;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use reconbench_geom::method::{
+    Diagnostic, Diagnostics, MethodError, Reconstruction, Reconstructor, RunCtx,
+};
+use reconbench_geom::{PointCloud, TriMesh};
+
+pub use params::{PARAM_DOCS, PriorityFrontParams, RhoSample, ScoreDistance};
+
+use density::{duplicates, mean_nn, search_grid};
+use grid::Grid;
+use mesher::{Cfg, FREE, Mesher, REFUSED, Stats};
+use run::DomainCfg;
+
+/// Registry name.
+pub const NAME: &str = "priority-front";
+
+/// The `priority-front` reconstructor.
+#[derive(Debug, Clone, Default)]
+pub struct PriorityFront {
+    /// Parameters.
+    pub params: PriorityFrontParams,
+}
+
+impl PriorityFront {
+    /// A reconstructor with validated parameters.
+    pub fn new(params: PriorityFrontParams) -> Result<Self, MethodError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
+/// Records `name` as a phase that started at `t0` (for phases that need `ctx` inside).
+fn end_phase(ctx: &mut RunCtx, name: &str, t0: Instant) {
+    ctx.timer
+        .phases
+        .push((name.to_string(), t0.elapsed().as_secs_f64()));
+}
+
+fn num(d: &mut Diagnostics, k: &str, v: f64) {
+    d.insert(k.to_string(), Diagnostic::Number(v));
+}
+
+/// The whole-run result before conversion to input indices.
+struct Grown {
+    tris: Vec<[u32; 3]>,
+    state: Vec<u8>,
+    loops: Vec<Vec<u32>>,
+    stats: Stats,
+}
+
+impl Reconstructor for PriorityFront {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn reconstruct(
+        &self,
+        cloud: &PointCloud,
+        ctx: &mut RunCtx,
+    ) -> Result<Reconstruction, MethodError> {
+        let p = &self.params;
+        p.validate()?;
+        let n = cloud.len();
+        if n < 3 {
+            return Err(MethodError::InvalidInput(format!(
+                "priority-front needs at least 3 points, got {n}"
+            )));
+        }
+        if n >= u32::MAX as usize {
+            return Err(MethodError::InvalidInput(format!(
+                "{n} points exceed u32 range"
+            )));
+        }
+        if let Some(s) = p.seed_point
+            && s as usize >= n
+        {
+            return Err(MethodError::InvalidParameter {
+                name: "seed_point".into(),
+                message: format!("index {s} out of range for {n} points"),
+            });
+        }
+        let t_start = Instant::now();
+        let input = cloud.positions();
+        let mut rng = ChaCha8Rng::seed_from_u64(ctx.seed);
+        let mut diag = Diagnostics::new();
+
+        // P1-P3: duplicates, rho, R.
+        let (dup, rho) = ctx.phase("density", || {
+            let (g0, ord0) = search_grid(input);
+            let dup = duplicates(&g0, &ord0, input);
+            let p0: Vec<DVec3> = ord0.iter().map(|&i| input[i as usize]).collect();
+            let dup0: Vec<bool> = ord0.iter().map(|&i| dup[i as usize]).collect();
+            let eligible = |i: usize| !dup0[i];
+            let rho = mean_nn(&g0, &p0, &eligible, p.rho_sample, &mut rng);
+            (dup, rho)
+        });
+        let n_dup = dup.iter().filter(|&&d| d).count();
+        num(&mut diag, "duplicates", n_dup as f64);
+        let Some(rho) = rho.filter(|_| n - n_dup >= 3) else {
+            // Fewer than 3 distinct points: nothing to mesh; every point is refused.
+            diag.insert(
+                "note".into(),
+                Diagnostic::Text("fewer than 3 distinct points: empty mesh".into()),
+            );
+            return finish(
+                input,
+                Vec::new(),
+                (0..n as u32).collect(),
+                diag,
+                t_start,
+                0.0,
+            );
+        };
+        let r0 = p.k * rho;
+        num(&mut diag, "rho", rho);
+        num(&mut diag, "radius", r0);
+
+        // P4: the hash grid, cell h = grid_cell * R (ASSUMPTION A2: h = R).
+        let (grid, order, pts) = ctx.phase("grid", || {
+            let (grid, order) = Grid::build(input, r0 * p.grid_cell);
+            let pts: Vec<DVec3> = order.iter().map(|&i| input[i as usize]).collect();
+            (grid, order, pts)
+        });
+        let mut inv = vec![0u32; n];
+        for (g, &i) in order.iter().enumerate() {
+            inv[i as usize] = g as u32;
+        }
+        let refused0: Vec<bool> = order.iter().map(|&i| dup[i as usize]).collect();
+        let centroid = {
+            let (s, c) = pts
+                .iter()
+                .zip(&refused0)
+                .filter(|(_, d)| !**d)
+                .fold((DVec3::ZERO, 0usize), |(s, c), (q, _)| (s + *q, c + 1));
+            s / c.max(1) as f64
+        };
+        let cfg = Cfg {
+            r: r0,
+            cos_alpha: p.alpha_max_deg.to_radians().cos(),
+            cos_beta: p.beta_max_deg.to_radians().cos(),
+            w: [p.w1, p.w2, p.w3],
+            seg_dist: p.score_distance == ScoreDistance::Segment,
+            apex_rule: p.apex_angle_rule,
+            link_prev: p.link_prev,
+            glue_mirror: p.glue_mirror,
+            cross_factor: p.cross_radius,
+            reject_free_inside: p.reject_free_inside,
+            fill_any_angle: p.fill_any_angle,
+            sector_check: p.sector_check,
+            revisit_passes: p.revisit_passes,
+        };
+        let dcfg = DomainCfg {
+            params: p,
+            r0,
+            centroid,
+            first_centre: p.seed_point.map(|s| inv[s as usize]),
+            seeds_before: 0,
+        };
+
+        // M0-M8.
+        let t_grow = Instant::now();
+        let grown = if p.threads <= 1 {
+            let mut m = Mesher::new(&pts, &grid, cfg, &refused0);
+            m.run_domain(&dcfg, &mut rng, ctx)?;
+            end_phase(ctx, "grow", t_grow);
+            Grown {
+                loops: m.loops(),
+                tris: std::mem::take(&mut m.tris),
+                state: std::mem::take(&mut m.state),
+                stats: m.stats.clone(),
+            }
+        } else {
+            let outs = parallel::grow_slabs(
+                &pts,
+                &refused0,
+                grid.lat.h(),
+                &cfg,
+                &dcfg,
+                p.threads,
+                ctx.seed,
+                ctx,
+            )?;
+            end_phase(ctx, "grow", t_grow);
+            let t_st = Instant::now();
+            let mut m = Mesher::new(&pts, &grid, cfg, &refused0);
+            parallel::stitch_import(&mut m, &outs);
+            m.grow(ctx)?;
+            // Restarts over the whole cloud for what the slabs left.
+            m.restarts(&dcfg, &mut rng, ctx)?;
+            end_phase(ctx, "stitch", t_st);
+            Grown {
+                loops: m.loops(),
+                tris: std::mem::take(&mut m.tris),
+                state: std::mem::take(&mut m.state),
+                stats: m.stats.clone(),
+            }
+        };
+        let grow_secs = t_grow.elapsed().as_secs_f64();
+
+        // M9: Free points become Refused; map back to input indices.
+        let (faces, refused) = ctx.phase("output", || {
+            let faces: Vec<[u32; 3]> = grown
+                .tris
+                .iter()
+                .map(|t| t.map(|g| order[g as usize]))
+                .collect();
+            let mut refused: Vec<u32> = (0..n)
+                .filter(|&g| grown.state[g] == FREE || grown.state[g] == REFUSED)
+                .map(|g| order[g])
+                .collect();
+            refused.sort_unstable();
+            (faces, refused)
+        });
+        let s = &grown.stats;
+        num(&mut diag, "seeds", s.seeds as f64);
+        num(&mut diag, "front_edges_processed", s.pops as f64);
+        num(&mut diag, "boundary_pops", s.boundary_pops as f64);
+        num(&mut diag, "joins", s.joins as f64);
+        num(&mut diag, "fills", s.fills as f64);
+        num(&mut diag, "links", (s.link_next + s.link_prev) as f64);
+        num(&mut diag, "link_next", s.link_next as f64);
+        num(&mut diag, "link_prev", s.link_prev as f64);
+        num(&mut diag, "glues", (s.glues + s.glue_mirrors) as f64);
+        num(&mut diag, "glue_mirrors", s.glue_mirrors as f64);
+        num(&mut diag, "glue_rejects", s.glue_rejects as f64);
+        num(&mut diag, "cross_rejects", s.cross_rejects as f64);
+        num(&mut diag, "threads", p.threads as f64);
+        num(&mut diag, "fail_rules", s.fail_rules as f64);
+        num(&mut diag, "sector_rejects", s.sector_rejects as f64);
+        num(&mut diag, "boundary_loops", grown.loops.len() as f64);
+        diag.insert(
+            "boundary_loop_sizes".into(),
+            Diagnostic::Series(grown.loops.iter().map(|l| l.len() as f64).collect()),
+        );
+        let mut cents = Vec::with_capacity(grown.loops.len() * 3);
+        for l in &grown.loops {
+            let c = l.iter().map(|&v| pts[v as usize]).sum::<DVec3>() / l.len().max(1) as f64;
+            cents.extend([c.x, c.y, c.z]);
+        }
+        diag.insert("boundary_loop_centroids".into(), Diagnostic::Series(cents));
+        num(
+            &mut diag,
+            "grow_triangles_per_second",
+            faces.len() as f64 / grow_secs.max(1e-9),
+        );
+        diag.insert("assumptions".into(), Diagnostic::Text(assumption_flags(p)));
+        finish(input, faces, refused, diag, t_start, grow_secs)
+    }
+}
+
+/// A one-line record of every ASSUMPTION flag in force (spec §7 item 9).
+fn assumption_flags(p: &PriorityFrontParams) -> String {
+    format!(
+        "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
+         A10=min:{},cap:{} I1=flat<={} cross={}R free_inside={} threads={}",
+        p.rho_sample,
+        p.grid_cell,
+        p.seed_patches,
+        p.patch_neighbours,
+        p.seed_outward,
+        p.score_distance,
+        p.apex_angle_rule,
+        p.link_prev,
+        p.glue_mirror,
+        p.restart_min_points,
+        p.restart_radius_cap,
+        p.restart_max_flatness,
+        p.cross_radius,
+        p.reject_free_inside,
+        p.threads
+    )
+}
+
+/// Builds the mesh (all input points as vertices) and the final diagnostics.
+fn finish(
+    input: &[DVec3],
+    faces: Vec<[u32; 3]>,
+    refused: Vec<u32>,
+    mut diag: Diagnostics,
+    t_start: Instant,
+    _grow_secs: f64,
+) -> Result<Reconstruction, MethodError> {
+    let nf = faces.len();
+    let mesh = TriMesh::new(input.to_vec(), faces)?;
+    let secs = t_start.elapsed().as_secs_f64();
+    num(&mut diag, "triangles", nf as f64);
+    num(&mut diag, "refused_points", refused.len() as f64);
+    num(&mut diag, "seconds", secs);
+    num(
+        &mut diag,
+        "triangles_per_second",
+        nf as f64 / secs.max(1e-9),
+    );
+    Ok(Reconstruction {
+        mesh,
+        refused,
+        diagnostics: diag,
+    })
+}

@@ -1,0 +1,324 @@
+//! Parameters of `priority-front` (spec 001 §2 and the ASSUMPTION register §4.10).
+
+use reconbench_geom::method::MethodError;
+use serde::{Deserialize, Serialize};
+
+/// How many points the density estimate ρ samples (ASSUMPTION A1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum RhoSample {
+    /// `s = min(N, max(100, ceil(0.05 N)))`: "100 points or up to 5 %" (the default).
+    #[default]
+    Max100Or5Percent,
+    /// `s = min(N, 100)`: the other reading of the paper's sentence.
+    Fixed100,
+}
+
+/// What `d(t)` in the score term `(R - d)/R` measures (ASSUMPTION A11).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScoreDistance {
+    /// Distance to the edge midpoint `o` (the paper's Step 1 wording; default).
+    #[default]
+    Midpoint,
+    /// Distance to the edge segment `ab` (the paper's Eq. 7 wording).
+    Segment,
+}
+
+/// Parameters of [`super::PriorityFront`]. Lengths are in units of the estimated mean
+/// nearest-neighbour distance ρ unless said otherwise; angles are in degrees. Defaults
+/// are the paper's (spec 001 §2) and the spec's ASSUMPTION choices.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PriorityFrontParams {
+    /// Search-radius multiplier k: the candidate ball has radius R = k·ρ (paper: 4).
+    pub k: f64,
+    /// Upper bound α_max on every triangle angle, degrees (paper: 120).
+    pub alpha_max_deg: f64,
+    /// Upper bound β_max on the normal change across the front edge, degrees (paper: 90).
+    pub beta_max_deg: f64,
+    /// Weight w1 of cos β in the candidate score C (paper: 1; raise for noisy data).
+    pub w1: f64,
+    /// Weight w2 of cos γ (isosceles-ness) in the score (paper: 1).
+    pub w2: f64,
+    /// Weight w3 of the proximity term (R - d)/R in the score (paper: 1).
+    pub w3: f64,
+    /// Number m of random patches tried for a seed (paper: 5..10; ASSUMPTION A4: 8).
+    pub seed_patches: usize,
+    /// Nearest Free neighbours of a patch centre, = fan triangles n (paper: 10..15;
+    /// ASSUMPTION A5/A6: 12).
+    pub patch_neighbours: usize,
+    /// ρ sample-size rule (ASSUMPTION A1).
+    pub rho_sample: RhoSample,
+    /// Hash-grid cell edge in units of R (ASSUMPTION A2: 1). Performance only: results do
+    /// not depend on it.
+    pub grid_cell: f64,
+    /// What d(t) in the score measures (ASSUMPTION A11).
+    pub score_distance: ScoreDistance,
+    /// Also apply Rule 1 to the apex angle at t (ASSUMPTION A12; default true).
+    pub apex_angle_rule: bool,
+    /// Orient the seed triangle's normal away from the cloud centroid (ASSUMPTION A9;
+    /// default true). When false the seed keeps the fan orientation of its patch.
+    pub seed_outward: bool,
+    /// Allow link-prev, the mirror of the paper's link (ASSUMPTION A16; default true).
+    pub link_prev: bool,
+    /// Try the mirror repair when glue's second triangle fails (ASSUMPTION A17; default
+    /// true). When false a failing glue rejects the candidate at once.
+    pub glue_mirror: bool,
+    /// Radius, in units of R, of the neighbourhood whose front edges the 2-D crossing test
+    /// checks (spec §4.4 Step 4: 2).
+    pub cross_radius: f64,
+    /// Optional strictness flag of spec §4.4 (not in the paper; default false): reject t
+    /// when another Free point projects strictly inside the 2-D triangle (a, t, b).
+    pub reject_free_inside: bool,
+    /// Waive Rule 1 for FILL, whose 3-edge hole has only one possible triangle
+    /// (IMPL-CHOICE I3, not in the paper; default true). False = the paper's rule.
+    pub fill_any_angle: bool,
+    /// Require the new edges to leave a, b (and a front point t) inside their free
+    /// sector in the projection plane (IMPL-CHOICE I4, not in the paper; default true).
+    pub sector_check: bool,
+    /// Extra passes over the live front once the heap is empty (IMPL-CHOICE I2, not in
+    /// the paper, whose edges that fail once stay boundary forever; default 4). 0 = the
+    /// paper's behaviour.
+    pub revisit_passes: u32,
+    /// Multi-seed restart while Free point patches remain (spec M8; default true).
+    pub restart: bool,
+    /// Minimum size of a Free point patch (R-graph component) that triggers a restart
+    /// (ASSUMPTION A10: 10).
+    pub restart_min_points: usize,
+    /// Cap of the restart radius in units of the original R₀ (ASSUMPTION A10: 2).
+    pub restart_radius_cap: f64,
+    /// Restart seeds must have a patch flatness score `1 - |mean normal|²` at most this
+    /// (IMPL-CHOICE I1, not in the paper; default 0.2) and all their patch neighbours
+    /// within the restart radius. Keeps restarts out of outlier clouds. The first seed is
+    /// exempt. Set to 1 to disable the flatness part.
+    pub restart_max_flatness: f64,
+    /// Upper bound on the number of seeds (first + restarts); 0 = no bound.
+    pub max_seeds: usize,
+    /// Force the first seed patch centre to this input point index (spec §4.2 "seed
+    /// override"); `None` = automatic.
+    pub seed_point: Option<u32>,
+    /// Worker threads for the slab-parallel growth (paper §3.7.1, Table 3). 1 = the
+    /// sequential algorithm. Output is deterministic for a fixed thread count.
+    pub threads: usize,
+}
+
+impl Default for PriorityFrontParams {
+    fn default() -> Self {
+        Self {
+            k: 4.0,
+            alpha_max_deg: 120.0,
+            beta_max_deg: 90.0,
+            w1: 1.0,
+            w2: 1.0,
+            w3: 1.0,
+            seed_patches: 8,
+            patch_neighbours: 12,
+            rho_sample: RhoSample::default(),
+            grid_cell: 1.0,
+            score_distance: ScoreDistance::default(),
+            apex_angle_rule: true,
+            seed_outward: true,
+            link_prev: true,
+            glue_mirror: true,
+            cross_radius: 2.0,
+            reject_free_inside: false,
+            fill_any_angle: true,
+            sector_check: true,
+            revisit_passes: 4,
+            restart: true,
+            restart_min_points: 10,
+            restart_radius_cap: 2.0,
+            restart_max_flatness: 0.2,
+            max_seeds: 0,
+            seed_point: None,
+            threads: 1,
+        }
+    }
+}
+
+fn bad(name: &str, message: impl Into<String>) -> MethodError {
+    MethodError::InvalidParameter {
+        name: name.to_string(),
+        message: message.into(),
+    }
+}
+
+impl PriorityFrontParams {
+    /// Checks ranges; returns the first offending parameter.
+    pub fn validate(&self) -> Result<(), MethodError> {
+        let finite_pos = |name: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(name, format!("must be finite and > 0, got {v}")))
+            }
+        };
+        finite_pos("k", self.k)?;
+        finite_pos("grid_cell", self.grid_cell)?;
+        finite_pos("cross_radius", self.cross_radius)?;
+        finite_pos("restart_radius_cap", self.restart_radius_cap)?;
+        if self.k > 1000.0 {
+            return Err(bad("k", format!("must be <= 1000, got {}", self.k)));
+        }
+        if !(self.grid_cell >= 0.125 && self.grid_cell <= 8.0) {
+            return Err(bad("grid_cell", "must be in [0.125, 8]"));
+        }
+        if !(self.alpha_max_deg > 60.0 && self.alpha_max_deg <= 180.0) {
+            return Err(bad(
+                "alpha_max_deg",
+                format!("must be in (60, 180], got {}", self.alpha_max_deg),
+            ));
+        }
+        if !(self.beta_max_deg > 0.0 && self.beta_max_deg <= 180.0) {
+            return Err(bad(
+                "beta_max_deg",
+                format!("must be in (0, 180], got {}", self.beta_max_deg),
+            ));
+        }
+        for (n, w) in [("w1", self.w1), ("w2", self.w2), ("w3", self.w3)] {
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(bad(n, format!("must be finite and >= 0, got {w}")));
+            }
+        }
+        if self.seed_patches == 0 || self.seed_patches > 10_000 {
+            return Err(bad("seed_patches", "must be in 1..=10000"));
+        }
+        if self.patch_neighbours < 2 || self.patch_neighbours > 1000 {
+            return Err(bad("patch_neighbours", "must be in 2..=1000"));
+        }
+        if self.restart_min_points < 3 {
+            return Err(bad("restart_min_points", "must be >= 3"));
+        }
+        if !(0.0..=1.0).contains(&self.restart_max_flatness) {
+            return Err(bad("restart_max_flatness", "must be in [0, 1]"));
+        }
+        if self.revisit_passes > 1000 {
+            return Err(bad("revisit_passes", "must be <= 1000"));
+        }
+        if self.threads == 0 || self.threads > 256 {
+            return Err(bad("threads", "must be in 1..=256"));
+        }
+        Ok(())
+    }
+}
+
+/// Name, unit and one-line doc of every parameter, for the harness registry's
+/// `ParamDoc` list (units as the registry spells them).
+pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
+    (
+        "k",
+        "spacing",
+        "candidate ball radius R = k * rho (paper: 4)",
+    ),
+    (
+        "alpha_max_deg",
+        "deg",
+        "upper bound on every triangle angle (paper: 120)",
+    ),
+    (
+        "beta_max_deg",
+        "deg",
+        "upper bound on the normal change across the front edge (paper: 90)",
+    ),
+    ("w1", "", "score weight of cos(beta) (paper: 1)"),
+    ("w2", "", "score weight of cos(gamma) (paper: 1)"),
+    ("w3", "", "score weight of (R - d)/R (paper: 1)"),
+    (
+        "seed_patches",
+        "count",
+        "random patches tried for a seed, m (A4: 8)",
+    ),
+    (
+        "patch_neighbours",
+        "count",
+        "neighbours / fan triangles per patch, n (A5/A6: 12)",
+    ),
+    (
+        "rho_sample",
+        "",
+        "rho sample rule: max100-or5-percent (A1) or fixed100",
+    ),
+    (
+        "grid_cell",
+        "",
+        "hash-grid cell edge in units of R (A2: 1; speed only)",
+    ),
+    (
+        "score_distance",
+        "",
+        "d(t) of the score: midpoint (A11) or segment",
+    ),
+    (
+        "apex_angle_rule",
+        "",
+        "apply alpha_max to the apex angle too (A12)",
+    ),
+    (
+        "seed_outward",
+        "",
+        "orient the seed away from the centroid (A9)",
+    ),
+    ("link_prev", "", "allow the mirrored link operation (A16)"),
+    ("glue_mirror", "", "try the mirrored glue repair (A17)"),
+    (
+        "cross_radius",
+        "",
+        "front edges within this many R are crossing-tested (spec: 2)",
+    ),
+    (
+        "reject_free_inside",
+        "",
+        "reject t when a Free point lies inside (a,t,b) in 2-D (off)",
+    ),
+    (
+        "fill_any_angle",
+        "",
+        "waive Rule 1 for FILL of a 3-edge hole (I3; true)",
+    ),
+    (
+        "sector_check",
+        "",
+        "new edges must lie in the free sector of their end vertices (I4; true)",
+    ),
+    (
+        "revisit_passes",
+        "count",
+        "passes over the live front after the heap empties (I2: 4; 0 = paper)",
+    ),
+    (
+        "restart",
+        "",
+        "re-seed while Free point patches remain (M8)",
+    ),
+    (
+        "restart_min_points",
+        "count",
+        "minimum Free patch size that triggers a restart (A10: 10)",
+    ),
+    (
+        "restart_radius_cap",
+        "",
+        "restart radius cap in units of R0 (A10: 2)",
+    ),
+    (
+        "restart_max_flatness",
+        "",
+        "max patch flatness score of restart seeds (I1: 0.2)",
+    ),
+    (
+        "max_seeds",
+        "count",
+        "bound on the number of seeds, 0 = none",
+    ),
+    (
+        "seed_point",
+        "",
+        "force the first seed patch centre (point index)",
+    ),
+    (
+        "threads",
+        "count",
+        "slab-parallel growth threads (1 = sequential)",
+    ),
+];

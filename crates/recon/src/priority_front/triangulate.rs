@@ -1,0 +1,461 @@
+//! TRIANGULATE(e) (spec §4.4) and the main loop M1-M7 (§4.3).
+
+use glam::DVec3;
+use reconbench_geom::method::{MethodError, RunCtx};
+
+use super::cross::{crosses, inside_2d, plane_basis};
+use super::grid::NONE;
+use super::mesher::{Cand, FREE, Mesher};
+
+/// The operation chosen for a popped edge.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Op {
+    Join(u32, DVec3),
+    Fill(u32),
+    LinkNext(u32, DVec3),
+    LinkPrev(u32, DVec3),
+    Glue(u32, DVec3, DVec3),
+    GlueMirror(u32, DVec3, DVec3),
+}
+
+/// Steps between two `ctx.checkpoint()` polls.
+const CHECK_EVERY: u64 = 4096;
+
+impl Mesher<'_> {
+    /// Rule 1 (+ A12) and the degeneracy guard for triangle `(x, y, z)`; `all` also
+    /// checks the angle at `y` (the apex for `(a, t, b)`). Returns the unnormalised
+    /// cross product `(y - x) x (z - x)` when the triangle passes.
+    #[inline]
+    fn shape_ok(&self, x: DVec3, y: DVec3, z: DVec3, apex: bool) -> Option<DVec3> {
+        let c = self.cfg.cos_alpha;
+        // angle > alpha_max  <=>  cos < cos(alpha_max); strict as the paper (§2).
+        let ang_bad = |u: DVec3, v: DVec3| {
+            let d = u.dot(v);
+            // cos(angle) < c  <=>  d < c |u||v|; squared compare when signs agree.
+            let m = c * (u.length_squared() * v.length_squared()).sqrt();
+            d < m
+        };
+        if ang_bad(y - x, z - x) || ang_bad(x - z, y - z) {
+            return None;
+        }
+        // ASSUMPTION A12: Rule 1 also bounds the apex angle at t.
+        if apex && ang_bad(x - y, z - y) {
+            return None;
+        }
+        let cr = (y - x).cross(z - x);
+        // ASSUMPTION A13 (degenerate guard): area < 1e-12 R^2 is rejected.
+        let r = self.cfg.r;
+        if cr.length() * 0.5 < 1e-12 * r * r {
+            return None;
+        }
+        Some(cr)
+    }
+
+    /// Step 1: gathers Free points within R of `o` into `free_near`, front points
+    /// within R (but `a`, `b`) into `cand` (score filled in later), and the front edges
+    /// near `o` for the crossing test into `xs`.
+    fn gather(&mut self, e: u32, a: u32, b: u32, o: DVec3) {
+        let r = self.cfg.r;
+        let r2 = r * r;
+        self.free_near.clear();
+        self.cand.clear();
+        self.xs.clear();
+        let pts = self.pts;
+        let state = &self.state;
+        let free_near = &mut self.free_near;
+        self.grid.for_cells(o, r, |range| {
+            for i in range {
+                if state[i] == FREE && (pts[i] - o).length_squared() <= r2 {
+                    free_near.push(i as u32);
+                }
+            }
+        });
+        let xr = self.cfg.cross_factor * r;
+        let xr2 = xr * xr;
+        let (cand, xs) = (&mut self.cand, &mut self.xs);
+        let (e_a, e_b, fin, fout) = (&self.e_a, &self.e_b, &self.fin, &self.fout);
+        self.fidx.for_near(o, xr, |v| {
+            let d2 = (pts[v as usize] - o).length_squared();
+            if d2 > xr2 {
+                return;
+            }
+            if d2 <= r2 && v != a && v != b {
+                cand.push(Cand {
+                    t: v,
+                    score: 0.0,
+                    n_new: DVec3::ZERO,
+                });
+            }
+            let out = fout[v as usize];
+            if out != NONE && out != e {
+                xs.push((v, e_b[out as usize]));
+            }
+            let inn = fin[v as usize];
+            if inn != NONE && inn != e {
+                let u = e_a[inn as usize];
+                if (pts[u as usize] - o).length_squared() > xr2 {
+                    xs.push((u, v));
+                }
+            }
+        });
+    }
+
+    /// During revisit passes (IMPL-CHOICE I2/I3) the front neighbours `z` (`z -> a`)
+    /// and `c` (`b -> c`) are candidates even beyond R (up to the crossing radius), so that large small-count holes
+    /// (whose third vertex lies outside the ball) can still be linked / filled.
+    fn add_front_neighbours(&mut self, a: u32, b: u32) {
+        let z = self.e_a[self.fin[a as usize] as usize];
+        let c = self.e_b[self.fout[b as usize] as usize];
+        let o = (self.pts[a as usize] + self.pts[b as usize]) * 0.5;
+        let lim = self.cfg.cross_factor * self.cfg.r;
+        for v in [z, c] {
+            if v != a
+                && v != b
+                && (self.pts[v as usize] - o).length() <= lim
+                && !self.cand.iter().any(|x| x.t == v)
+            {
+                self.cand.push(Cand {
+                    t: v,
+                    score: 0.0,
+                    n_new: DVec3::ZERO,
+                });
+            }
+        }
+    }
+
+    /// Steps 2-3 for candidate `t`: the rules and the score. Returns the score and the
+    /// unit normal of `(a, t, b)`, or `None` when a rule removes `t`.
+    #[inline]
+    fn evaluate(&self, a: u32, b: u32, t: u32, o: DVec3, n_old: DVec3) -> Option<(f64, DVec3)> {
+        let (pa, pb, pt) = (
+            self.pts[a as usize],
+            self.pts[b as usize],
+            self.pts[t as usize],
+        );
+        // ASSUMPTION A13: an existing edge {a,t} / {t,b} is allowed only when the
+        // operation consumes it as the front edge t->a / b->t.
+        let mut fill = false;
+        if self.state[t as usize] != FREE {
+            let ta = self.e_a[self.fin[a as usize] as usize] == t;
+            let bt = self.e_b[self.fout[b as usize] as usize] == t;
+            if (!ta && self.adj.has(a, t)) || (!bt && self.adj.has(b, t)) {
+                return None;
+            }
+            fill = (ta && bt) || (self.revisiting && (ta || bt));
+        }
+        // IMPL-CHOICE I3: a FILL has exactly one possible triangle (the 3-edge hole);
+        // with `fill_any_angle` Rule 1 is waived for it (only the degeneracy guard
+        // stays), otherwise skinny 3-edge holes could never close. During revisit
+        // passes (I2) the same holds for LINK (ear clipping): a hole whose angles all
+        // exceed alpha_max (a regular 7-gon) could not close otherwise.
+        let cr = if fill && self.cfg.fill_any_angle {
+            let cr = (pt - pa).cross(pb - pa);
+            if cr.length() * 0.5 < 1e-12 * self.cfg.r * self.cfg.r {
+                return None;
+            }
+            cr
+        } else {
+            self.shape_ok(pa, pt, pb, self.cfg.apex_rule)?
+        };
+        let n_new = cr.normalize();
+        let cos_b = n_new.dot(n_old);
+        // Rule 2: remove t when beta > beta_max.
+        if cos_b < self.cfg.cos_beta {
+            return None;
+        }
+        let r = self.cfg.r;
+        let v = pt - o;
+        let ev = (pb - pa).normalize();
+        let vl = v.length();
+        let v_perp = v - v.dot(ev) * ev;
+        let cos_g = if vl > 0.0 { v_perp.length() / vl } else { 0.0 };
+        // ASSUMPTION A11: d(t) is the distance to the midpoint o (segment as option).
+        let d = if self.cfg.seg_dist {
+            let s = (pt - pa).dot(pb - pa) / (pb - pa).length_squared();
+            (pt - (pa + (pb - pa) * s.clamp(0.0, 1.0))).length()
+        } else {
+            vl
+        };
+        let w = self.cfg.w;
+        let score = w[0] * cos_b + w[1] * cos_g + w[2] * ((r - d) / r).max(0.0);
+        Some((score, n_new))
+    }
+
+    /// Second triangle `(x, y, z)` of a glue repair: Rule 1 (all angles), degeneracy,
+    /// Rule 2 against `n_ref`, the new edge `{u, w}` must not exist, and the 2-D
+    /// crossing test of that edge. Returns its unit normal.
+    fn repair_ok(&self, tri: [u32; 3], n_ref: DVec3, new_edge: (u32, u32)) -> Option<DVec3> {
+        let p = tri.map(|i| self.pts[i as usize]);
+        let cr = self.shape_ok(p[0], p[1], p[2], true)?;
+        let n2 = cr.normalize();
+        if n2.dot(n_ref) < self.cfg.cos_beta || self.adj.has(new_edge.0, new_edge.1) {
+            return None;
+        }
+        let o = (self.pts[new_edge.0 as usize] + self.pts[new_edge.1 as usize]) * 0.5;
+        let np = plane_normal(n_ref, n2);
+        if crosses(self.pts, &self.xs, np, o, self.cfg.r, &[new_edge]) {
+            return None;
+        }
+        Some(n2)
+    }
+
+    /// TRIANGULATE(e): the reference point and its operation, or `None` (boundary).
+    pub fn triangulate(&mut self, e: u32) -> Option<Op> {
+        let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
+        let (pa, pb) = (self.pts[a as usize], self.pts[b as usize]);
+        let o = (pa + pb) * 0.5;
+        let n_old = self.e_nrm[e as usize];
+        self.gather(e, a, b, o);
+        if self.revisiting {
+            self.add_front_neighbours(a, b);
+        }
+        // Step 2-3 over front candidates (already in `cand`) and Free points.
+        let mut k = 0;
+        while k < self.cand.len() {
+            let t = self.cand[k].t;
+            if let Some((s, n)) = self.evaluate(a, b, t, o, n_old) {
+                self.cand[k].score = s;
+                self.cand[k].n_new = n;
+                k += 1;
+            } else {
+                self.cand.swap_remove(k);
+            }
+        }
+        for k in 0..self.free_near.len() {
+            let t = self.free_near[k];
+            if let Some((score, n_new)) = self.evaluate(a, b, t, o, n_old) {
+                self.cand.push(Cand { t, score, n_new });
+            }
+        }
+        if self.cand.is_empty() {
+            self.stats.fail_rules += 1;
+        }
+        // Step 4: pop candidates by decreasing score (ties: lower index) and validate.
+        while !self.cand.is_empty() {
+            let mut best = 0;
+            for k in 1..self.cand.len() {
+                let (c, bc) = (&self.cand[k], &self.cand[best]);
+                if c.score > bc.score || (c.score == bc.score && c.t < bc.t) {
+                    best = k;
+                }
+            }
+            let c = self.cand.swap_remove(best);
+            if let Some(op) = self.validate(e, a, b, o, n_old, c) {
+                return Some(op);
+            }
+        }
+        None
+    }
+
+    /// Crossing test and classification of candidate `c` (§4.4 Step 4, §4.5).
+    fn validate(&mut self, e: u32, a: u32, b: u32, o: DVec3, n_old: DVec3, c: Cand) -> Option<Op> {
+        let t = c.t;
+        // ASSUMPTION A14: projection plane through o, normal normalize(n_old + n_new).
+        let np = plane_normal(n_old, c.n_new);
+        if self.cfg.sector_check && !self.in_sectors(a, b, t, np) {
+            self.stats.sector_rejects += 1;
+            return None;
+        }
+        if crosses(self.pts, &self.xs, np, o, self.cfg.r, &[(a, t), (t, b)]) {
+            self.stats.cross_rejects += 1;
+            return None;
+        }
+        if self.cfg.reject_free_inside {
+            let (u, v) = plane_basis(np);
+            let tri = [a, t, b].map(|i| {
+                let q = self.pts[i as usize] - o;
+                [q.dot(u), q.dot(v)]
+            });
+            for &f in &self.free_near {
+                if f != t {
+                    let q = self.pts[f as usize] - o;
+                    if inside_2d(tri, [q.dot(u), q.dot(v)]) {
+                        return None;
+                    }
+                }
+            }
+        }
+        if self.state[t as usize] == FREE {
+            return Some(Op::Join(t, c.n_new));
+        }
+        // ASSUMPTION A15: "connected with" = joined by a live front edge.
+        let bt = self.e_b[self.fout[b as usize] as usize] == t;
+        let ta = self.e_a[self.fin[a as usize] as usize] == t;
+        match (bt, ta) {
+            (true, true) => Some(Op::Fill(t)),
+            (true, false) => Some(Op::LinkNext(t, c.n_new)),
+            (false, true) => {
+                if self.cfg.link_prev {
+                    Some(Op::LinkPrev(t, c.n_new))
+                } else {
+                    None
+                }
+            }
+            (false, false) => {
+                // GLUE; ASSUMPTION A17: validate the repair triangle (p, q, b), else the
+                // mirror (a, y, p), else reject p.
+                let g = self.fin[t as usize];
+                let q = self.e_a[g as usize];
+                if let Some(n2) = self.repair_ok([t, q, b], self.e_nrm[g as usize], (q, b)) {
+                    // IMPL-CHOICE I4 for the repair: q->b leaves q inside q's free sector
+                    // and b inside b's (b's edges being p->b, b->c after the first
+                    // triangle).
+                    let w = self.e_a[self.fin[q as usize] as usize];
+                    let cc = self.e_b[self.fout[b as usize] as usize];
+                    let np = plane_normal(self.e_nrm[g as usize], n2);
+                    if !self.cfg.sector_check
+                        || (self.sector_has(np, q, w, t, b) && self.sector_has(np, b, t, cc, q))
+                    {
+                        return Some(Op::Glue(t, c.n_new, n2));
+                    }
+                }
+                if self.cfg.glue_mirror {
+                    let h = self.fout[t as usize];
+                    let y = self.e_b[h as usize];
+                    if let Some(n2) = self.repair_ok([a, y, t], self.e_nrm[h as usize], (a, y)) {
+                        let z = self.e_a[self.fin[a as usize] as usize];
+                        let sy = self.e_b[self.fout[y as usize] as usize];
+                        let np = plane_normal(self.e_nrm[h as usize], n2);
+                        if !self.cfg.sector_check
+                            || (self.sector_has(np, a, z, t, y) && self.sector_has(np, y, t, sy, a))
+                        {
+                            return Some(Op::GlueMirror(t, c.n_new, n2));
+                        }
+                    }
+                }
+                let _ = e;
+                self.stats.glue_rejects += 1;
+                None
+            }
+        }
+    }
+
+    /// True when direction `x -> dir` lies strictly inside the free sector of `x` whose
+    /// front edges are `w -> x -> y` (clockwise from `y - x` to `w - x` seen from `np`).
+    fn sector_has(&self, np: DVec3, x: u32, w: u32, y: u32, dir: u32) -> bool {
+        let (u, v) = plane_basis(np);
+        let d2 = |to: u32| {
+            let q = self.pts[to as usize] - self.pts[x as usize];
+            [q.dot(u), q.dot(v)]
+        };
+        let s0 = d2(y);
+        let a = cw_angle(s0, d2(dir));
+        a > 0.0 && a < cw_angle(s0, d2(w))
+    }
+
+    /// IMPL-CHOICE I4 (not in the paper): the new edges must leave `a`, `b` (and a
+    /// front point `t`) inside their free sector, the angle on the unmeshed side between
+    /// the vertex's two front edges, in the projection plane. This catches triangles that
+    /// fold over the mesh next to a reflex front vertex, which the edge-crossing test
+    /// misses because edges sharing an endpoint are skipped.
+    fn in_sectors(&self, a: u32, b: u32, t: u32, np: DVec3) -> bool {
+        let (u, v) = plane_basis(np);
+        let d2 = |from: u32, to: u32| {
+            let q = self.pts[to as usize] - self.pts[from as usize];
+            [q.dot(u), q.dot(v)]
+        };
+        // Free sector at vertex x with front edges w -> x -> y: clockwise from (y - x)
+        // to (w - x) (the mesh lies left of every front edge).
+        let inside = |x: u32, w: u32, y: u32, dir: u32| {
+            let s0 = d2(x, y);
+            let lim = cw_angle(s0, d2(x, w));
+            let a = cw_angle(s0, d2(x, dir));
+            a > 0.0 && a < lim
+        };
+        let z = self.e_a[self.fin[a as usize] as usize];
+        let c = self.e_b[self.fout[b as usize] as usize];
+        if z != t && !inside(a, z, b, t) {
+            return false;
+        }
+        // At b the out-edge is b->c and the in-edge a->b.
+        if c != t && !inside(b, a, c, t) {
+            return false;
+        }
+        if self.state[t as usize] != FREE {
+            let q = self.e_a[self.fin[t as usize] as usize];
+            let y = self.e_b[self.fout[t as usize] as usize];
+            if q != b && y != a {
+                // glue: both a and b must lie in t's free sector
+                if !inside(t, q, y, a) || !inside(t, q, y, b) {
+                    return false;
+                }
+            } else if q == b && y != a {
+                if !inside(t, q, y, a) {
+                    return false;
+                }
+            } else if y == a && q != b && !inside(t, q, y, b) {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Main loop M1-M7 until the heap is empty; polls `ctx.checkpoint()` every few
+    /// thousand pops.
+    pub fn grow(&mut self, ctx: &RunCtx) -> Result<(), MethodError> {
+        let mut passes = 0;
+        let mut tris_at_pass = self.tris.len();
+        loop {
+            let Some(e) = self.pop() else {
+                // IMPL-CHOICE I2 (not in the paper, whose M4 never retries an edge):
+                // when the heap runs dry, push the live front edges again, up to
+                // `revisit_passes` times and only while the last pass added triangles.
+                // Edges that failed early often succeed once their neighbourhood has
+                // been meshed (slits, narrow gaps between meeting fronts).
+                if passes < self.cfg.revisit_passes
+                    && (passes == 0 || self.tris.len() > tris_at_pass)
+                {
+                    passes += 1;
+                    self.revisiting = true;
+                    tris_at_pass = self.tris.len();
+                    self.repush_all();
+                    if self.heap_is_empty() {
+                        break;
+                    }
+                    continue;
+                }
+                break;
+            };
+            self.stats.pops += 1;
+            if self.stats.pops.is_multiple_of(CHECK_EVERY) {
+                ctx.checkpoint()?;
+            }
+            match self.triangulate(e) {
+                // M4: e stays in the front as a boundary edge (not pushed back).
+                None => self.stats.boundary_pops += 1,
+                Some(Op::Join(p, n)) => self.join(e, p, n),
+                Some(Op::Fill(p)) => self.fill(e, p),
+                Some(Op::LinkNext(p, n)) => self.link_next(e, p, n),
+                Some(Op::LinkPrev(p, n)) => self.link_prev(e, p, n),
+                Some(Op::Glue(p, n, n2)) => self.glue(e, p, n, n2),
+                Some(Op::GlueMirror(p, n, n2)) => self.glue_mirror(e, p, n, n2),
+            }
+        }
+        self.revisiting = false;
+        Ok(())
+    }
+}
+
+/// Clockwise angle in [0, 2 pi) from 2-D direction `s` to `d`.
+#[inline]
+fn cw_angle(s: [f64; 2], d: [f64; 2]) -> f64 {
+    let cr = s[0] * d[1] - s[1] * d[0];
+    let dt = s[0] * d[0] + s[1] * d[1];
+    let th = cr.atan2(dt);
+    if th <= 0.0 {
+        -th
+    } else {
+        std::f64::consts::TAU - th
+    }
+}
+
+/// Projection-plane normal `normalize(n1 + n2)`, falling back to `n1` (A14).
+#[inline]
+pub(crate) fn plane_normal(n1: DVec3, n2: DVec3) -> DVec3 {
+    let s = n1 + n2;
+    if s.length_squared() > 1e-12 {
+        s.normalize()
+    } else {
+        n1
+    }
+}
