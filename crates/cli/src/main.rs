@@ -10,7 +10,27 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
+/// `println!` panics when stdout is a closed pipe (`reconbench list | head`). Restoring
+/// SIGPIPE would need `unsafe`, so this hook ends the process quietly in that one case,
+/// as a C tool killed by SIGPIPE would, and defers to the default hook otherwise.
+fn quiet_on_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.starts_with("failed printing to stdout") {
+            std::process::exit(141);
+        }
+        default(info);
+    }));
+}
+
 fn main() -> ExitCode {
+    quiet_on_broken_pipe();
     let cli = cmd::Cli::parse();
     match cmd::run(cli) {
         Ok(()) => ExitCode::SUCCESS,

@@ -133,7 +133,7 @@ fn a_worker_killed_from_outside_fails_only_its_cell() {
         .unwrap();
     let t0 = Instant::now();
     let worker = loop {
-        if let Some(&w) = children(child.id()).first() {
+        if let Some(&w) = workers(child.id()).first() {
             break w;
         }
         assert!(t0.elapsed() < Duration::from_secs(30), "no worker started");

@@ -344,17 +344,18 @@ fn validate_report(r: &ReportOptions, swept: &[String]) -> Result<()> {
             )));
         }
     }
-    if let Some(x) = &r.x {
-        if !swept.contains(x) && x != "points" {
-            return Err(HarnessError::input(format!(
-                "report.x = '{x}' is not a swept perturbation key; swept: {}",
-                if swept.is_empty() {
-                    "(none)".to_string()
-                } else {
-                    swept.join(", ")
-                }
-            )));
-        }
+    if let Some(x) = &r.x
+        && !swept.contains(x)
+        && x != "points"
+    {
+        return Err(HarnessError::input(format!(
+            "report.x = '{x}' is not a swept perturbation key; swept: {}",
+            if swept.is_empty() {
+                "(none)".to_string()
+            } else {
+                swept.join(", ")
+            }
+        )));
     }
     if !(r.render_max.is_finite() && r.render_max > 0.0) {
         return Err(HarnessError::input("report.render_max must be > 0"));

@@ -100,6 +100,13 @@ pub enum Built {
     Reconstruct(Box<dyn Reconstructor>),
 }
 
+/// Constructor of a normal estimator from its typed parameters.
+pub type MakeNormals<P> = fn(P, &MethodEnv) -> Result<Box<dyn NormalEstimator>, MethodError>;
+/// Constructor of a feature detector from its typed parameters.
+pub type MakeFeatures<P> = fn(P, &MethodEnv) -> Result<Box<dyn FeatureDetector>, MethodError>;
+/// Constructor of a reconstructor from its typed parameters.
+pub type MakeReconstruct<P> = fn(P, &MethodEnv) -> Result<Box<dyn Reconstructor>, MethodError>;
+
 type BuildFn = Arc<dyn Fn(&Value, &MethodEnv) -> Result<Built, MethodError> + Send + Sync>;
 type DefaultsFn = Arc<dyn Fn() -> Value + Send + Sync>;
 
@@ -213,7 +220,7 @@ pub fn normals<P>(
     seed: &'static str,
     summary: &'static str,
     params: &'static [ParamDoc],
-    make: fn(P, &MethodEnv) -> Result<Box<dyn NormalEstimator>, MethodError>,
+    make: MakeNormals<P>,
 ) -> MethodEntry
 where
     P: DeserializeOwned + Serialize + Default + 'static,
@@ -237,7 +244,7 @@ pub fn features<P>(
     seed: &'static str,
     summary: &'static str,
     params: &'static [ParamDoc],
-    make: fn(P, &MethodEnv) -> Result<Box<dyn FeatureDetector>, MethodError>,
+    make: MakeFeatures<P>,
 ) -> MethodEntry
 where
     P: DeserializeOwned + Serialize + Default + 'static,
@@ -261,7 +268,7 @@ pub fn reconstruct<P>(
     seed: &'static str,
     summary: &'static str,
     params: &'static [ParamDoc],
-    make: fn(P, &MethodEnv) -> Result<Box<dyn Reconstructor>, MethodError>,
+    make: MakeReconstruct<P>,
 ) -> MethodEntry
 where
     P: DeserializeOwned + Serialize + Default + 'static,
@@ -298,20 +305,21 @@ impl MethodEntry {
 /// All registered methods. One line per method.
 fn entries() -> Vec<MethodEntry> {
     use crate::methods::{debug, oracle};
-    vec![
+    let mut v = vec![
         // Oracles: calibrate the harness (metric floor, geometry floor).
         oracle::gt_normals(),
         oracle::gt_features(),
         oracle::reference_mesh(),
-        // Algorithm crates register here, e.g.
-        // normals::<reconbench_normals::PcaParams>("pca", "seed 002 §3.1", ...),
         // Test-only methods, hidden from `list` (see `list --all`).
         debug::panic(),
         debug::abort(),
         debug::hang(),
         debug::alloc(),
         debug::sleep(),
-    ]
+    ];
+    // Algorithm crates: one line each in methods/algorithms.rs.
+    v.extend(crate::methods::algorithms::entries());
+    v
 }
 
 /// The registry, built once.

@@ -214,10 +214,10 @@ pub fn write_report(
     );
     let mut md = String::new();
     let _ = writeln!(md, "# {name}\n");
-    if let Some(e) = exp {
-        if !e.file.description.is_empty() {
-            let _ = writeln!(md, "{}\n", e.file.description.trim());
-        }
+    if let Some(e) = exp
+        && !e.file.description.is_empty()
+    {
+        let _ = writeln!(md, "{}\n", e.file.description.trim());
     }
     let failed: Vec<&Row> = rows.iter().filter(|r| r.status != Status::Ok).collect();
     let _ = writeln!(

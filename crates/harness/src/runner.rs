@@ -147,10 +147,10 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let mut runs = Vec::new();
     let done: HashSet<String> = if opts.resume {
         let (rows, _) = read_rows(&results)?;
-        if let Ok(text) = std::fs::read_to_string(&manifest_path) {
-            if let Ok(m) = serde_json::from_str::<Manifest>(&text) {
-                runs = m.runs;
-            }
+        if let Ok(text) = std::fs::read_to_string(&manifest_path)
+            && let Ok(m) = serde_json::from_str::<Manifest>(&text)
+        {
+            runs = m.runs;
         }
         rows.into_iter()
             .filter(|r| !(opts.retry_failed && r.status != Status::Ok))
@@ -403,13 +403,13 @@ fn spawn_and_wait(
                     Status::Timeout,
                     format!("exceeded the per-cell timeout of {timeout_s} s"),
                 ));
-            } else if let (Some(limit), Some((rss, _))) = (memory_limit_mib, rss_mib(Some(pid))) {
-                if rss > limit as f64 {
-                    killed = Some((
-                        Status::Oom,
-                        format!("resident memory {rss:.0} MiB exceeded the limit of {limit} MiB"),
-                    ));
-                }
+            } else if let (Some(limit), Some((rss, _))) = (memory_limit_mib, rss_mib(Some(pid)))
+                && rss > limit as f64
+            {
+                killed = Some((
+                    Status::Oom,
+                    format!("resident memory {rss:.0} MiB exceeded the limit of {limit} MiB"),
+                ));
             }
             if killed.is_some() {
                 let _ = child.kill();
@@ -423,22 +423,19 @@ fn spawn_and_wait(
     if let Some((st, reason)) = killed {
         return Ok(Outcome::Failed(st, reason));
     }
-    if status.success() {
-        if let Some(line) = stdout
+    if status.success()
+        && let Some(line) = stdout
             .lines()
             .rev()
             .find_map(|l| l.strip_prefix(REPLY_PREFIX))
-        {
-            return Ok(match serde_json::from_str::<Reply>(line) {
-                Ok(r) => Outcome::Reply(Box::new(r)),
-                Err(e) => Outcome::Failed(Status::Crash, format!("unreadable worker reply: {e}")),
-            });
-        }
+    {
+        return Ok(match serde_json::from_str::<Reply>(line) {
+            Ok(r) => Outcome::Reply(Box::new(r)),
+            Err(e) => Outcome::Failed(Status::Crash, format!("unreadable worker reply: {e}")),
+        });
     }
-    Ok(Outcome::Failed(
-        classify(status, &stderr).0,
-        classify(status, &stderr).1,
-    ))
+    let (st, reason) = classify(status, &stderr);
+    Ok(Outcome::Failed(st, reason))
 }
 
 fn read_tail(r: Option<&mut impl Read>, cap: usize) -> String {
@@ -578,13 +575,13 @@ pub fn merge(inputs: &[PathBuf], out_dir: &Path) -> Result<MergeSummary> {
         warnings.extend(skipped);
         total += rows.len();
         for r in rows {
-            if let Some(old) = by_key.get(&r.key) {
-                if old.spec != r.spec {
-                    return Err(HarnessError::input(format!(
-                        "merge: key {} has different specs in two inputs (different code versions?)",
-                        r.key
-                    )));
-                }
+            if let Some(old) = by_key.get(&r.key)
+                && old.spec != r.spec
+            {
+                return Err(HarnessError::input(format!(
+                    "merge: key {} has different specs in two inputs (different code versions?)",
+                    r.key
+                )));
             }
             by_key.insert(r.key.clone(), r);
         }
@@ -600,14 +597,14 @@ pub fn merge(inputs: &[PathBuf], out_dir: &Path) -> Result<MergeSummary> {
             .replacen("results", "manifest", 1)
             .replace(".jsonl", ".json");
         let mpath = f.with_file_name(mname);
-        if let Ok(text) = std::fs::read_to_string(&mpath) {
-            if let Ok(m) = serde_json::from_str::<Manifest>(&text) {
-                match &mut manifest {
-                    None => manifest = Some(m),
-                    Some(acc) => {
-                        acc.runs.extend(m.runs);
-                        acc.cells.extend(m.cells);
-                    }
+        if let Ok(text) = std::fs::read_to_string(&mpath)
+            && let Ok(m) = serde_json::from_str::<Manifest>(&text)
+        {
+            match &mut manifest {
+                None => manifest = Some(m),
+                Some(acc) => {
+                    acc.runs.extend(m.runs);
+                    acc.cells.extend(m.cells);
                 }
             }
         }

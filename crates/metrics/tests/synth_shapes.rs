@@ -16,9 +16,7 @@ fn opts() -> MeshEvalOptions {
 
 #[test]
 fn reference_meshes_of_synth_shapes_evaluate_cleanly() {
-    // (double-torus left out: its analytic closest point is not 1-Lipschitz near the
-    // junction of the two tori, reported to synth.)
-    for spec in ["sphere", "torus", "box"] {
+    for spec in ["sphere", "torus", "box", "double-torus"] {
         let shape = reconbench_synth::from_spec(spec).unwrap();
         let reference = Reference::analytic(&*shape);
         let mesh = shape.reference_mesh(48);

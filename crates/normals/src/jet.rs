@@ -7,13 +7,12 @@
 
 use glam::{DMat3, DVec3};
 use nalgebra::{SMatrix, SVector};
-use rayon::prelude::*;
 use reconbench_geom::PointCloud;
 use reconbench_geom::linalg::sym_eigen3;
 use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
 use serde::{Deserialize, Serialize};
 
-use crate::neighbors::{check_k, finish, knn_including_self};
+use crate::neighbors::estimate_per_point;
 use crate::plane_fit::fit_plane_normal;
 
 /// Parameters of `jet`.
@@ -96,16 +95,7 @@ impl NormalEstimator for Jet {
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
-        check_k("k", self.params.k, 6)?;
-        let pts = cloud.positions();
-        let nb = ctx.phase("knn", || knn_including_self(pts, self.params.k, 3))?;
-        ctx.checkpoint()?;
-        let normals: Vec<DVec3> = ctx.phase("fit", || {
-            (0..pts.len())
-                .into_par_iter()
-                .map(|i| jet_normal(pts, nb.row(i)))
-                .collect()
-        });
-        finish(pts, normals, self.params.orient_k, ctx)
+        let p = &self.params;
+        estimate_per_point(cloud, ctx, p.k, 6, p.orient_k, jet_normal)
     }
 }

@@ -2,20 +2,19 @@
 //! seed 000's ASSUMPTION B-09 defines it (the original paper is not available, so this is
 //! labelled "LVM-approx", never "LVM").
 //!
-//! 1. k = 15 nearest neighbours; 2. provisional plane-fit normal `n0`; 3. project onto the
-//! plane through the point with normal `n0`; its 2D Delaunay one-ring gives the natural
-//! neighbours; 4. with >= 5 of them fit `z = a x^2 + b xy + c y^2 + d x + e y` (through the
-//! point) and return `(-d, -e, 1)`; with 3-4, the angle-weighted mean of the one-ring
-//! triangle normals; otherwise `n0`.
+//! Steps: k = 15 nearest neighbours; a provisional plane-fit normal `n0`; projection onto
+//! the plane through the point with normal `n0`, whose 2D Delaunay one-ring gives the
+//! natural neighbours; with at least 5 of them a fit of `z = a x^2 + b xy + c y^2 + d x +
+//! e y` (through the point) giving `(-d, -e, 1)`; with 3-4, the angle-weighted mean of the
+//! one-ring triangle normals; otherwise `n0`.
 
 use glam::{DVec2, DVec3};
 use nalgebra::{SMatrix, SVector};
-use rayon::prelude::*;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
 use serde::{Deserialize, Serialize};
 
-use crate::neighbors::{check_k, finish, knn_including_self};
+use crate::neighbors::estimate_per_point;
 use crate::plane_fit::fit_plane_normal;
 
 /// Largest supported k: neighbourhoods live in fixed-size stack buffers.
@@ -164,22 +163,13 @@ impl NormalEstimator for LvmApprox {
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
-        check_k("k", self.params.k, 4)?;
         if self.params.k > MAX_K {
             return Err(MethodError::InvalidParameter {
                 name: "k".into(),
                 message: format!("at most {MAX_K}, got {}", self.params.k),
             });
         }
-        let pts = cloud.positions();
-        let nb = ctx.phase("knn", || knn_including_self(pts, self.params.k, 3))?;
-        ctx.checkpoint()?;
-        let normals: Vec<DVec3> = ctx.phase("fit", || {
-            (0..pts.len())
-                .into_par_iter()
-                .map(|i| lvm_normal(pts, nb.row(i)))
-                .collect()
-        });
-        finish(pts, normals, self.params.orient_k, ctx)
+        let p = &self.params;
+        estimate_per_point(cloud, ctx, p.k, 4, p.orient_k, lvm_normal)
     }
 }

@@ -2,6 +2,8 @@
 //! (optional orientation, diagnostics).
 
 use glam::DVec3;
+use rayon::prelude::*;
+use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Diagnostic, MethodError, Normals, RunCtx};
 use reconbench_geom::spatial::PointIndex;
 
@@ -97,4 +99,28 @@ pub fn finish(
         oriented,
         diagnostics,
     })
+}
+
+/// The common shape of every k-NN estimator: validate `k`, build the neighbour table
+/// (phase `knn`), fit each point's normal in parallel from its row (phase `fit`), then
+/// orient and package. `fit(points, row)` gets the row with the point itself first.
+pub fn estimate_per_point(
+    cloud: &PointCloud,
+    ctx: &mut RunCtx,
+    k: usize,
+    min_k: usize,
+    orient_k: usize,
+    fit: impl Fn(&[DVec3], &[u32]) -> DVec3 + Sync,
+) -> Result<Normals, MethodError> {
+    check_k("k", k, min_k)?;
+    let pts = cloud.positions();
+    let nb = ctx.phase("knn", || knn_including_self(pts, k, 3))?;
+    ctx.checkpoint()?;
+    let normals: Vec<DVec3> = ctx.phase("fit", || {
+        (0..pts.len())
+            .into_par_iter()
+            .map(|i| fit(pts, nb.row(i)))
+            .collect()
+    });
+    finish(pts, normals, orient_k, ctx)
 }

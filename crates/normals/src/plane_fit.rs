@@ -5,13 +5,12 @@
 //! of the k nearest neighbours about their (weighted) centroid.
 
 use glam::{DMat3, DVec3};
-use rayon::prelude::*;
 use reconbench_geom::PointCloud;
 use reconbench_geom::linalg::sym_eigen3;
 use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
 use serde::{Deserialize, Serialize};
 
-use crate::neighbors::{check_k, finish, knn_including_self};
+use crate::neighbors::estimate_per_point;
 
 /// Relative eigenvalue gap under which a neighbourhood counts as degenerate (coincident
 /// or collinear points): the normal is then undetermined and reported as zero.
@@ -118,17 +117,10 @@ impl NormalEstimator for PlaneFit {
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
-        check_k("k", self.params.k, 3)?;
-        let pts = cloud.positions();
-        let nb = ctx.phase("knn", || knn_including_self(pts, self.params.k, 3))?;
-        ctx.checkpoint()?;
-        let normals: Vec<DVec3> = ctx.phase("fit", || {
-            (0..pts.len())
-                .into_par_iter()
-                .map(|i| fit_plane_normal(pts, nb.row(i), |_| 1.0))
-                .collect()
-        });
-        finish(pts, normals, self.params.orient_k, ctx)
+        let p = &self.params;
+        estimate_per_point(cloud, ctx, p.k, 3, p.orient_k, |pts, row| {
+            fit_plane_normal(pts, row, |_| 1.0)
+        })
     }
 }
 
@@ -138,32 +130,22 @@ impl NormalEstimator for WeightedPlaneFit {
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
-        check_k("k", self.params.k, 3)?;
-        let pts = cloud.positions();
-        let nb = ctx.phase("knn", || knn_including_self(pts, self.params.k, 3))?;
-        ctx.checkpoint()?;
-        let rule = self.params.sigma_rule;
-        let normals: Vec<DVec3> = ctx.phase("fit", || {
-            (0..pts.len())
-                .into_par_iter()
-                .map(|i| {
-                    let row = nb.row(i);
-                    let p = pts[i];
-                    let dk2 = row
-                        .iter()
-                        .map(|&j| pts[j as usize].distance_squared(p))
-                        .fold(0.0, f64::max);
-                    let sigma2 = match rule {
-                        SigmaRule::ThirdSquare => dk2 / 3.0,
-                        SigmaRule::ThirdDistance => dk2 / 9.0,
-                    };
-                    if sigma2 <= 0.0 {
-                        return DVec3::ZERO;
-                    }
-                    fit_plane_normal(pts, row, |q| (-q.distance_squared(p) / sigma2).exp())
-                })
-                .collect()
-        });
-        finish(pts, normals, self.params.orient_k, ctx)
+        let p = &self.params;
+        let rule = p.sigma_rule;
+        estimate_per_point(cloud, ctx, p.k, 3, p.orient_k, |pts, row| {
+            let c = pts[row[0] as usize];
+            let dk2 = row
+                .iter()
+                .map(|&j| pts[j as usize].distance_squared(c))
+                .fold(0.0, f64::max);
+            let sigma2 = match rule {
+                SigmaRule::ThirdSquare => dk2 / 3.0,
+                SigmaRule::ThirdDistance => dk2 / 9.0,
+            };
+            if sigma2 <= 0.0 {
+                return DVec3::ZERO;
+            }
+            fit_plane_normal(pts, row, |q| (-q.distance_squared(c) / sigma2).exp())
+        })
     }
 }

@@ -246,6 +246,36 @@ pub fn run(cmd: HarnessCommand) -> CliResult {
     }
 }
 
+/// `run --dry-run`: the expanded grid (this shard's cells), nothing run or written.
+fn print_grid(exp: &Experiment, shard: Option<(usize, usize)>, json: bool) -> CliResult {
+    let cells = reconbench_harness::experiment::shard_cells(&exp.cells, shard);
+    if json {
+        let rows: Vec<_> = cells
+            .iter()
+            .map(|c| {
+                serde_json::json!({
+                    "index": c.index, "key": c.key, "dataset": c.labels.dataset,
+                    "perturbation": c.labels.perturb, "method": c.labels.method,
+                })
+            })
+            .collect();
+        return super::print_json(&rows);
+    }
+    for c in &cells {
+        println!(
+            "{:>5} {} {:<20} {:<24} {}",
+            c.index, c.key, c.labels.dataset, c.labels.perturb, c.labels.method
+        );
+    }
+    println!(
+        "{}: {} cells (of {}); nothing was run",
+        exp.name,
+        cells.len(),
+        exp.cells.len()
+    );
+    Ok(())
+}
+
 fn run_experiment(a: RunArgs) -> CliResult {
     let exp = Experiment::load(&a.experiment).map_err(harness_err)?;
     let shard = a
@@ -254,10 +284,13 @@ fn run_experiment(a: RunArgs) -> CliResult {
         .map(parse_shard)
         .transpose()
         .map_err(harness_err)?;
-    if let Some(t) = a.timeout {
-        if !(t.is_finite() && t > 0.0) {
-            return Err(CliError::input(format!("--timeout must be > 0, got {t}")));
-        }
+    if let Some(t) = a.timeout
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(CliError::input(format!("--timeout must be > 0, got {t}")));
+    }
+    if a.dry_run {
+        return print_grid(&exp, shard, a.json);
     }
     let out_dir = a
         .out

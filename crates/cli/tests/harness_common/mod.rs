@@ -89,6 +89,19 @@ pub fn children(pid: u32) -> Vec<u32> {
     out
 }
 
+/// Worker processes among the children of `pid` (their command line has `worker`; the
+/// runner also starts `git` for its provenance).
+pub fn workers(pid: u32) -> Vec<u32> {
+    children(pid)
+        .into_iter()
+        .filter(|c| {
+            std::fs::read(format!("/proc/{c}/cmdline"))
+                .map(|b| b.split(|&x| x == 0).any(|a| a == b"worker"))
+                .unwrap_or(false)
+        })
+        .collect()
+}
+
 pub fn kill9(pid: u32) {
     let _ = Command::new("kill").args(["-9", &pid.to_string()]).status();
 }

@@ -1,5 +1,6 @@
-//! Methods the harness registers itself: ground-truth oracles and test-only methods.
-//! Real algorithms live in their own crates and are registered in [`crate::registry`].
+//! Methods the harness registers: ground-truth oracles, test-only methods, and the
+//! entries of the algorithm crates ([`algorithms`]).
 
+pub mod algorithms;
 pub mod debug;
 pub mod oracle;

@@ -513,11 +513,8 @@ static DEFS: &[ShapeDef] = &[
             if rh >= 0.95 {
                 return Err(p.error("rh", format!("{rh} must be < 0.95")));
             }
-            let region = Region2::new(vec![
-                loops::rect(DVec2::splat(-1.0), DVec2::splat(1.0)),
-                loops::circle(DVec2::ZERO, rh, false),
-            ]);
-            let g = prism::Prism::new(region, -1.0, 1.0).map_err(|m| p.error("rh", m))?;
+            let g = prism::Prism::new(cube_with_hole_region(rh), -1.0, 1.0)
+                .map_err(|m| p.error("rh", m))?;
             Ok(boxed("cube-with-hole", g))
         },
     },
@@ -526,10 +523,9 @@ static DEFS: &[ShapeDef] = &[
         summary: "extruded star with k tips (outer radius 1, inner radius ri), thickness h: sharp tips, reflex edges and rims",
         params: &[("k", 5.0), ("ri", 0.5), ("h", 0.4)],
         build: |p| {
-            let pts = star_points(p.count("k", 3)?, p.in_range("ri", 0.05, 0.95)?);
+            let region = star_region(p.count("k", 3)?, p.in_range("ri", 0.05, 0.95)?);
             let h = p.positive("h")?;
-            let g = prism::Prism::new(Region2::new(vec![loops::polygon(&pts)]), -0.5 * h, 0.5 * h)
-                .map_err(|m| p.error("ri", m))?;
+            let g = prism::Prism::new(region, -0.5 * h, 0.5 * h).map_err(|m| p.error("ri", m))?;
             Ok(boxed("star-sharp", g))
         },
     },
@@ -538,13 +534,11 @@ static DEFS: &[ShapeDef] = &[
         summary: "smooth star slab: offset by r of a star (k tips, inner radius ri) with inner corners filleted (radius f > r)",
         params: &[("k", 5.0), ("ri", 0.5), ("f", 0.15), ("r", 0.1)],
         build: |p| {
-            let k = p.count("k", 3)?;
-            let pts = star_points(k, p.in_range("ri", 0.05, 0.95)?);
-            let f = p.positive("f")?;
-            let radii: Vec<f64> = (0..2 * k)
-                .map(|i| if i % 2 == 1 { f } else { 0.0 })
-                .collect();
-            let region = Region2::new(vec![loops::filleted_polygon(&pts, &radii)]);
+            let region = star_smooth_region(
+                p.count("k", 3)?,
+                p.in_range("ri", 0.05, 0.95)?,
+                p.positive("f")?,
+            );
             let g = slab::Slab::new(region, p.positive("r")?).map_err(|m| p.error("r", m))?;
             Ok(boxed("star-smooth", g))
         },
@@ -615,13 +609,40 @@ fn holed_slab(
             format!("holes of radius {ri} overlap (centres {gap} apart)"),
         ));
     }
+    let g = slab::Slab::new(holed_region(d, ro, ri, xs), r).map_err(|m| p.error("r", m))?;
+    Ok(boxed(name, g))
+}
+
+/// A stadium (half-length `d`, radius `ro`) with circular holes of radius `ri` centred at
+/// `xs` on the x axis.
+fn holed_region(d: f64, ro: f64, ri: f64, xs: &[f64]) -> Region2 {
     let mut lps = vec![loops::stadium(d, ro)];
     lps.extend(
         xs.iter()
             .map(|&x| loops::circle(DVec2::new(x, 0.0), ri, false)),
     );
-    let g = slab::Slab::new(Region2::new(lps), r).map_err(|m| p.error("r", m))?;
-    Ok(boxed(name, g))
+    Region2::new(lps)
+}
+
+/// The square [-1, 1]^2 with a central circular hole of radius `rh`.
+fn cube_with_hole_region(rh: f64) -> Region2 {
+    Region2::new(vec![
+        loops::rect(DVec2::splat(-1.0), DVec2::splat(1.0)),
+        loops::circle(DVec2::ZERO, rh, false),
+    ])
+}
+
+/// The sharp star polygon of [`star_points`].
+fn star_region(k: usize, ri: f64) -> Region2 {
+    Region2::new(vec![loops::polygon(&star_points(k, ri))])
+}
+
+/// The star of [`star_points`] with its inner (reflex) corners filleted by radius `f`.
+fn star_smooth_region(k: usize, ri: f64, f: f64) -> Region2 {
+    let radii: Vec<f64> = (0..2 * k)
+        .map(|i| if i % 2 == 1 { f } else { 0.0 })
+        .collect();
+    Region2::new(vec![loops::filleted_polygon(&star_points(k, ri), &radii)])
 }
 
 /// Star polygon, counter-clockwise: tips at radius 1 (angle 90 deg first), inner
@@ -707,4 +728,100 @@ pub fn listing() -> Vec<ShapeListing> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn default(shape: &str, key: &str) -> f64 {
+        let d = find_def(shape).unwrap();
+        d.params.iter().find(|p| p.0 == key).unwrap().1
+    }
+
+    /// The planar regions of every built-in prism and slab, with default parameters.
+    fn builtin_regions() -> Vec<(&'static str, Region2)> {
+        let dt = |k: &str| default("double-torus", k);
+        let th = |k: &str| default("three-holes", k);
+        let ss = |k: &str| default("star-smooth", k);
+        vec![
+            (
+                "double-torus",
+                holed_region(dt("d"), dt("ro"), dt("ri"), &[-dt("d"), dt("d")]),
+            ),
+            (
+                "three-holes",
+                holed_region(th("d"), th("ro"), th("ri"), &[-th("d"), 0.0, th("d")]),
+            ),
+            (
+                "cube-with-hole",
+                cube_with_hole_region(default("cube-with-hole", "rh")),
+            ),
+            (
+                "star-sharp",
+                star_region(
+                    default("star-sharp", "k") as usize,
+                    default("star-sharp", "ri"),
+                ),
+            ),
+            (
+                "star-smooth",
+                star_smooth_region(ss("k") as usize, ss("ri"), ss("f")),
+            ),
+            ("fandisk-like", Region2::new(vec![fandisk_profile()])),
+        ]
+    }
+
+    /// Winding number of the boundary (arcs as fine polylines) around `q`.
+    fn winding(region: &Region2, q: DVec2) -> f64 {
+        let mut w = 0.0;
+        for e in region.elems() {
+            let n = if matches!(e, Elem2::Arc { .. }) {
+                256
+            } else {
+                1
+            };
+            for s in e.polyline(n).windows(2) {
+                let (a, b) = (s[0] - q, s[1] - q);
+                w += a.perp_dot(b).atan2(a.dot(b));
+            }
+        }
+        w / std::f64::consts::TAU
+    }
+
+    /// The parity test of `Region2::contains` (which decides cap vs. rim in every slab and
+    /// prism closest point) casts a horizontal ray: check it exactly on the degenerate
+    /// lines, i.e. at the heights of every element end point, arc centre and arc extreme
+    /// (the double-torus' holes have their rim end points on the line through their
+    /// centres), against an independent winding number.
+    #[test]
+    fn region_containment_is_exact_on_degenerate_rays() {
+        for (name, region) in builtin_regions() {
+            region.check_closed().unwrap();
+            let mut ys = Vec::new();
+            for e in region.elems() {
+                ys.extend([e.start().y, e.end().y]);
+                if let Elem2::Arc { c, r, .. } = *e {
+                    ys.extend([c.y, c.y + r, c.y - r]);
+                }
+            }
+            let (lo, hi) = region.bounds();
+            let mut xs: Vec<f64> = (0..=200)
+                .map(|i| lo.x - 0.1 + (hi.x - lo.x + 0.2) * i as f64 / 200.0)
+                .collect();
+            xs.push(0.0);
+            ys.sort_by(f64::total_cmp);
+            ys.dedup();
+            for y in ys {
+                for &x in &xs {
+                    let q = DVec2::new(x, y);
+                    if region.closest_boundary(q).dist2 < 1e-6 {
+                        continue; // on (or within polyline error of) the boundary
+                    }
+                    let inside = winding(&region, q).abs() > 0.5;
+                    assert_eq!(region.contains(q), inside, "{name}: contains({q})");
+                }
+            }
+        }
+    }
 }
