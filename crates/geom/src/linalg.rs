@@ -166,7 +166,8 @@ fn null_vector(r0: DVec3, r1: DVec3, r2: DVec3) -> Option<DVec3> {
 ///
 /// Closed form: the eigenvalues from the trigonometric solution of the characteristic
 /// cubic (Smith 1961), the eigenvector as the largest cross product of two rows of
-/// `A - l0 I`. The cubic's smallest root is only accurate to about `sqrt(eps)` when the
+/// `A - l0 I`; the two larger eigenvalues are then recomputed from the 2x2 restriction of
+/// `A` to the plane orthogonal to the vector. The cubic's smallest root is only accurate to about `sqrt(eps)` when the
 /// two largest eigenvalues nearly coincide (disc-shaped neighbourhoods, i.e. most
 /// planar patches), so the vector is refined once: `l0` is replaced by the Rayleigh
 /// quotient of the first vector (error quadratic in the vector's error) and the cross
@@ -232,6 +233,15 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
     let Some(v) = null_vector(r0, r1, r2) else {
         return full(m);
     };
+    // The other two eigenvalues from the 2x2 restriction of A to the plane orthogonal
+    // to v (stable even when they nearly coincide, where the cubic's roots are not).
+    let (e1, e2) = v.any_orthonormal_pair();
+    let (ae1, ae2) = (a * e1, a * e2);
+    let (b11, b22, b12) = (e1.dot(ae1), e2.dot(ae2), e1.dot(ae2));
+    let mean = 0.5 * (b11 + b22);
+    let half = 0.5 * (b11 - b22);
+    let rad = (half * half + b12 * b12).sqrt();
+    let (l1, l2) = (mean - rad, mean + rad);
     let l0 = rayleigh(v).min(l1);
     Ok(SmallestEigen3 {
         values: [l0 * scale, l1 * scale, l2 * scale],
