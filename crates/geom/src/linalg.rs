@@ -213,7 +213,9 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
     let l0 = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
     let l1 = 3.0 * q - l2 - l0;
     let mag = l0.abs().max(l2.abs());
-    if !(l1 - l0 > SMALLEST_GAP_REL * mag) {
+    // Written so that a NaN (not expected for finite input) also takes the fallback.
+    let separated = l1 - l0 > SMALLEST_GAP_REL * mag;
+    if !separated {
         return full(m);
     }
     let rows = |l: f64| {
