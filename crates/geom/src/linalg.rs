@@ -126,6 +126,131 @@ pub fn sym_eigen3(m: DMat3) -> Result<SymEigen3> {
     })
 }
 
+/// Smallest eigenpair of a symmetric 3x3 matrix, with all three eigenvalues: the fast
+/// path of PCA normal estimation ([`sym_eigen3_smallest`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SmallestEigen3 {
+    /// Eigenvalues in ascending order.
+    pub values: [f64; 3],
+    /// Unit eigenvector of `values[0]`, with the sign convention of [`SymEigen3`] (its
+    /// largest-magnitude component is positive, ties to the lower axis).
+    pub vector: DVec3,
+}
+
+/// Relative gap `(l1 - l0) / max|l|` below which [`sym_eigen3_smallest`] hands the
+/// matrix to the iterative solver. The closed-form vector's error grows like
+/// `eps * max|l| / (l1 - l0)`, as any solver's does, but the two solvers' noise would no
+/// longer agree closely; near-repeated smallest eigenvalues (isotropic or rod-like
+/// neighbourhoods, all coincident or collinear points) are rare in surface data, so the
+/// fallback costs nothing measurable.
+const SMALLEST_GAP_REL: f64 = 1e-4;
+
+/// Unit null vector of the (numerically rank-2) symmetric matrix with rows `r0, r1, r2`:
+/// the largest cross product of two rows. `None` when all cross products vanish.
+fn null_vector(r0: DVec3, r1: DVec3, r2: DVec3) -> Option<DVec3> {
+    let c = [r0.cross(r1), r0.cross(r2), r1.cross(r2)];
+    let l = c.map(DVec3::length_squared);
+    let best = if l[0] >= l[1] && l[0] >= l[2] {
+        0
+    } else if l[1] >= l[2] {
+        1
+    } else {
+        2
+    };
+    (l[best] > 0.0 && l[best].is_finite()).then(|| c[best] / l[best].sqrt())
+}
+
+/// Smallest eigenvalue's eigenvector of the symmetric 3x3 matrix `m`, plus all three
+/// eigenvalues: the same result as [`sym_eigen3`] (`values`, `vectors[0]`) up to
+/// rounding, several times faster.
+///
+/// Closed form: the eigenvalues from the trigonometric solution of the characteristic
+/// cubic (Smith 1961), the eigenvector as the largest cross product of two rows of
+/// `A - l0 I`; the two larger eigenvalues are then recomputed from the 2x2 restriction of
+/// `A` to the plane orthogonal to the vector. The cubic's smallest root is only accurate to about `sqrt(eps)` when the
+/// two largest eigenvalues nearly coincide (disc-shaped neighbourhoods, i.e. most
+/// planar patches), so the vector is refined once: `l0` is replaced by the Rayleigh
+/// quotient of the first vector (error quadratic in the vector's error) and the cross
+/// product repeated. Matrices whose two smallest eigenvalues are within
+/// [`SMALLEST_GAP_REL`] of each other (relative to the largest magnitude), including
+/// every degenerate or isotropic case, are solved by [`sym_eigen3`] instead.
+///
+/// Like [`sym_eigen3`], only the symmetric part is used and the matrix is scaled by its
+/// largest entry. Errors: as [`sym_eigen3`].
+pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
+    let full = |m: DMat3| {
+        sym_eigen3(m).map(|e| SmallestEigen3 {
+            values: e.values,
+            vector: e.vectors[0],
+        })
+    };
+    check_finite("matrix column", &[m.x_axis, m.y_axis, m.z_axis])?;
+    let sym = 0.5 * (m + m.transpose());
+    let scale = sym
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |s, x| s.max(x.abs()));
+    if scale == 0.0 {
+        return full(m);
+    }
+    let a = sym * (1.0 / scale);
+    let (a00, a11, a22) = (a.x_axis.x, a.y_axis.y, a.z_axis.z);
+    let (a01, a02, a12) = (a.y_axis.x, a.z_axis.x, a.z_axis.y);
+    let q = (a00 + a11 + a22) / 3.0;
+    let (b00, b11, b22) = (a00 - q, a11 - q, a22 - q);
+    let p1 = a01 * a01 + a02 * a02 + a12 * a12;
+    let p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1;
+    if p2 <= 1e-24 {
+        // (Nearly) a multiple of the identity.
+        return full(m);
+    }
+    let p = (p2 / 6.0).sqrt();
+    let det_b = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02)
+        + a02 * (a01 * a12 - b11 * a02);
+    let r = (det_b / (2.0 * p * p * p)).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    let l2 = q + 2.0 * p * phi.cos();
+    let l0 = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    let l1 = 3.0 * q - l2 - l0;
+    let mag = l0.abs().max(l2.abs());
+    // Written so that a NaN (not expected for finite input) also takes the fallback.
+    let separated = l1 - l0 > SMALLEST_GAP_REL * mag;
+    if !separated {
+        return full(m);
+    }
+    let rows = |l: f64| {
+        (
+            DVec3::new(a00 - l, a01, a02),
+            DVec3::new(a01, a11 - l, a12),
+            DVec3::new(a02, a12, a22 - l),
+        )
+    };
+    let (r0, r1, r2) = rows(l0);
+    let Some(v) = null_vector(r0, r1, r2) else {
+        return full(m);
+    };
+    let rayleigh = |v: DVec3| v.dot(a * v);
+    let l0 = rayleigh(v);
+    let (r0, r1, r2) = rows(l0);
+    let Some(v) = null_vector(r0, r1, r2) else {
+        return full(m);
+    };
+    // The other two eigenvalues from the 2x2 restriction of A to the plane orthogonal
+    // to v (stable even when they nearly coincide, where the cubic's roots are not).
+    let (e1, e2) = v.any_orthonormal_pair();
+    let (ae1, ae2) = (a * e1, a * e2);
+    let (b11, b22, b12) = (e1.dot(ae1), e2.dot(ae2), e1.dot(ae2));
+    let mean = 0.5 * (b11 + b22);
+    let half = 0.5 * (b11 - b22);
+    let rad = (half * half + b12 * b12).sqrt();
+    let (l1, l2) = (mean - rad, mean + rad);
+    let l0 = rayleigh(v).min(l1);
+    Ok(SmallestEigen3 {
+        values: [l0 * scale, l1 * scale, l2 * scale],
+        vector: canonical_sign(v),
+    })
+}
+
 /// Weighted mean and covariance of a point set.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Covariance {

@@ -2,7 +2,7 @@
 
 use reconbench_geom::spatial::{
     MeshBvh, Neighbor, PointIndex, closest_point_on_segment, closest_point_on_triangle,
-    closest_point_on_triangle_bary, mean_spacing,
+    closest_point_on_triangle_bary, knn_self_map, knn_self_table, mean_spacing,
 };
 use reconbench_geom::topology::examples;
 use reconbench_geom::{DVec3, GeomError, TriMesh};
@@ -483,4 +483,46 @@ fn ray_casts_on_a_cube() {
         assert!((h.t - tmin).abs() < 1e-12);
         assert!(h.normal.dot(dir) < 0.0);
     }
+}
+
+/// `knn_self_map` sees exactly the rows of `knn_self_table` (= `knn_all`), with the right
+/// positions, on random, grid and duplicated sets, with and without the point itself.
+#[test]
+fn knn_self_map_matches_the_table() {
+    let mut rng = Rng(9);
+    let sets = [
+        random_points(&mut rng, 700),
+        grid(7, 0.5),
+        duplicated(&mut rng),
+    ];
+    for pts in &sets {
+        for (k, excl) in [(1, true), (9, true), (16, false), (40, false)] {
+            let t = knn_self_table(pts, k, excl).unwrap();
+            let idx = PointIndex::new(pts).unwrap();
+            assert_eq!(idx.knn_all(k, excl).unwrap(), t);
+            let ok = knn_self_map(
+                pts,
+                k,
+                excl,
+                || (),
+                |_, i, hits| {
+                    hits.len() == t.k
+                        && hits.iter().enumerate().all(|(j, h)| {
+                            h.index == t.indices(i)[j]
+                                && h.dist2 == t.dist2(i)[j]
+                                && h.point == pts[h.index as usize]
+                        })
+                },
+            )
+            .unwrap();
+            assert!(ok.iter().all(|&b| b), "k = {k}, exclude_self = {excl}");
+        }
+    }
+    // Many exact copies: the lowest indices win (and the query stays cheap).
+    let pts = vec![DVec3::new(0.5, -1.0, 2.0); 5000];
+    let t = knn_self_table(&pts, 4, false).unwrap();
+    assert_eq!(t.indices(4999), &[0, 1, 2, 3]);
+    assert!(knn_self_table(&[], 3, false).is_err());
+    assert!(knn_self_table(&[DVec3::ZERO], 1, true).is_err());
+    assert!(knn_self_map(&[DVec3::splat(f64::NAN)], 1, false, || (), |_, _, _| 0).is_err());
 }

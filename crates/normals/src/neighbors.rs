@@ -2,10 +2,9 @@
 //! (optional orientation, diagnostics).
 
 use glam::DVec3;
-use rayon::prelude::*;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Diagnostic, MethodError, Normals, RunCtx};
-use reconbench_geom::spatial::PointIndex;
+use reconbench_geom::spatial::{KnnHit, knn_self_map, knn_self_table};
 
 use crate::orient::orient_mst;
 
@@ -34,15 +33,9 @@ pub fn knn_including_self(
     k: usize,
     min_points: usize,
 ) -> Result<Neighbors, MethodError> {
-    if points.len() < min_points {
-        return Err(MethodError::InvalidInput(format!(
-            "normal estimation needs at least {min_points} points, got {}",
-            points.len()
-        )));
-    }
+    check_min_points(points, min_points)?;
     let k = k.min(points.len());
-    let index = PointIndex::new(points)?;
-    let table = index.knn_all(k, false)?;
+    let table = knn_self_table(points, k, false)?;
     // With exact duplicates the query point need not come first: put it first so that
     // row[0] is always the point itself.
     let mut indices = table.indices;
@@ -55,6 +48,53 @@ pub fn knn_including_self(
         }
     }
     Ok(Neighbors { k, indices })
+}
+
+/// Errors when there are fewer than `min_points` points.
+fn check_min_points(points: &[DVec3], min_points: usize) -> Result<(), MethodError> {
+    if points.len() < min_points {
+        return Err(MethodError::InvalidInput(format!(
+            "normal estimation needs at least {min_points} points, got {}",
+            points.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Position in the sorted kNN result `hits` of point `i` of the row convention of
+/// [`Neighbors`] (the point itself first): row slot `j` holds `hits[row_slot(self_pos,
+/// j)]`, where `self_pos` is where point `i` is in `hits` (see [`self_position`]).
+/// Slot 0 is the point itself; the hit it displaced moves to the point's old slot.
+#[inline]
+pub fn row_slot(self_pos: Option<usize>, j: usize) -> Option<usize> {
+    match (self_pos, j) {
+        (_, 0) => None,
+        (Some(p), j) if j == p => Some(0),
+        (_, j) => Some(j),
+    }
+}
+
+/// Where point `i` is in its own sorted kNN result (normally 0; with exact duplicates of
+/// lower index it can be later, or missing when k of them precede it).
+#[inline]
+pub fn self_position(i: usize, hits: &[KnnHit]) -> Option<usize> {
+    if hits.first().is_some_and(|h| h.index as usize == i) {
+        Some(0)
+    } else {
+        hits.iter().position(|h| h.index as usize == i)
+    }
+}
+
+/// The neighbour positions of point `i` in the row order of [`Neighbors`] (the point
+/// itself first), from its sorted kNN result.
+pub fn row_points(
+    points: &[DVec3],
+    i: usize,
+    hits: &[KnnHit],
+) -> impl Iterator<Item = DVec3> + Clone {
+    let sp = self_position(i, hits);
+    let me = points[i];
+    (0..hits.len()).map(move |j| row_slot(sp, j).map_or(me, |h| hits[h].point))
 }
 
 /// Checks a neighbourhood size parameter.
@@ -101,26 +141,53 @@ pub fn finish(
     })
 }
 
-/// The common shape of every k-NN estimator: validate `k`, build the neighbour table
-/// (phase `knn`), fit each point's normal in parallel from its row (phase `fit`), then
-/// orient and package. `fit(points, row)` gets the row with the point itself first.
+/// The common shape of every k-NN estimator: validate `k`, find each point's k nearest
+/// neighbours and fit its normal from that row, in parallel and fused (phase `knn+fit`:
+/// no neighbour table is materialised), then orient and package. `fit(points, row)` gets
+/// the row with the point itself first, exactly the rows of [`knn_including_self`].
 pub fn estimate_per_point(
     cloud: &PointCloud,
     ctx: &mut RunCtx,
     k: usize,
     min_k: usize,
     orient_k: usize,
-    fit: impl Fn(&[DVec3], &[u32]) -> DVec3 + Sync,
+    fit: impl Fn(&[DVec3], &[u32]) -> DVec3 + Sync + Send,
+) -> Result<Normals, MethodError> {
+    estimate_per_point_hits(cloud, ctx, k, min_k, orient_k, |pts, i, hits, row| {
+        row.clear();
+        row.extend(row_points_indices(i, hits));
+        fit(pts, row)
+    })
+}
+
+/// Indices of the row of point `i` (the point itself first) from its sorted kNN result.
+fn row_points_indices(i: usize, hits: &[KnnHit]) -> impl Iterator<Item = u32> + '_ {
+    let sp = self_position(i, hits);
+    (0..hits.len()).map(move |j| row_slot(sp, j).map_or(i as u32, |h| hits[h].index))
+}
+
+/// [`estimate_per_point`] for fits that use the kNN result directly:
+/// `fit(points, i, hits, scratch)` gets point `i`'s k nearest points sorted by
+/// (distance, index) with their positions (see [`row_points`] for the row order) and a
+/// reusable per-thread scratch vector.
+pub fn estimate_per_point_hits(
+    cloud: &PointCloud,
+    ctx: &mut RunCtx,
+    k: usize,
+    min_k: usize,
+    orient_k: usize,
+    fit: impl Fn(&[DVec3], usize, &[KnnHit], &mut Vec<u32>) -> DVec3 + Sync + Send,
 ) -> Result<Normals, MethodError> {
     check_k("k", k, min_k)?;
     let pts = cloud.positions();
-    let nb = ctx.phase("knn", || knn_including_self(pts, k, 3))?;
+    check_min_points(pts, 3)?;
+    // ASSUMPTION B-07: k includes the point itself.
+    let k = k.min(pts.len());
+    let normals = ctx.phase("knn+fit", || {
+        knn_self_map(pts, k, false, Vec::new, |row, i, hits| {
+            fit(pts, i, hits, row)
+        })
+    })?;
     ctx.checkpoint()?;
-    let normals: Vec<DVec3> = ctx.phase("fit", || {
-        (0..pts.len())
-            .into_par_iter()
-            .map(|i| fit(pts, nb.row(i)))
-            .collect()
-    });
     finish(pts, normals, orient_k, ctx)
 }

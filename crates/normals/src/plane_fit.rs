@@ -6,11 +6,11 @@
 
 use glam::{DMat3, DVec3};
 use reconbench_geom::PointCloud;
-use reconbench_geom::linalg::sym_eigen3;
+use reconbench_geom::linalg::sym_eigen3_smallest;
 use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
 use serde::{Deserialize, Serialize};
 
-use crate::neighbors::estimate_per_point;
+use crate::neighbors::{estimate_per_point_hits, row_points};
 
 /// Relative eigenvalue gap under which a neighbourhood counts as degenerate (coincident
 /// or collinear points): the normal is then undetermined and reported as zero.
@@ -86,10 +86,18 @@ pub struct WeightedPlaneFit {
 /// Smallest-eigenvalue eigenvector of the weighted covariance of `row` (zero when the
 /// neighbourhood is degenerate). `weight(q)` gives the weight of neighbour position q.
 pub fn fit_plane_normal(points: &[DVec3], row: &[u32], weight: impl Fn(DVec3) -> f64) -> DVec3 {
+    plane_normal_of(row.iter().map(|&j| points[j as usize]), weight)
+}
+
+/// [`fit_plane_normal`] over neighbour positions (iterated twice: centroid, then
+/// covariance).
+pub fn plane_normal_of(
+    row: impl Iterator<Item = DVec3> + Clone,
+    weight: impl Fn(DVec3) -> f64,
+) -> DVec3 {
     let mut wsum = 0.0;
     let mut c = DVec3::ZERO;
-    for &j in row {
-        let q = points[j as usize];
+    for q in row.clone() {
         let w = weight(q);
         wsum += w;
         c += w * q;
@@ -99,14 +107,19 @@ pub fn fit_plane_normal(points: &[DVec3], row: &[u32], weight: impl Fn(DVec3) ->
     }
     c /= wsum;
     let mut m = DMat3::ZERO;
-    for &j in row {
-        let q = points[j as usize];
+    for q in row {
         let d = q - c;
         let w = weight(q);
         m += DMat3::from_cols(d * (w * d.x), d * (w * d.y), d * (w * d.z));
     }
-    match sym_eigen3(m) {
-        Ok(e) if e.values[1] > DEGENERATE_REL * e.values[2].max(f64::MIN_POSITIVE) => e.vectors[0],
+    normal_of_covariance(m)
+}
+
+/// The plane normal of a covariance matrix: the smallest eigenvalue's eigenvector, zero
+/// when the two largest eigenvalues do not span a plane (coincident or collinear points).
+pub fn normal_of_covariance(m: DMat3) -> DVec3 {
+    match sym_eigen3_smallest(m) {
+        Ok(e) if e.values[1] > DEGENERATE_REL * e.values[2].max(f64::MIN_POSITIVE) => e.vector,
         _ => DVec3::ZERO,
     }
 }
@@ -118,8 +131,8 @@ impl NormalEstimator for PlaneFit {
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
         let p = &self.params;
-        estimate_per_point(cloud, ctx, p.k, 3, p.orient_k, |pts, row| {
-            fit_plane_normal(pts, row, |_| 1.0)
+        estimate_per_point_hits(cloud, ctx, p.k, 3, p.orient_k, |pts, i, hits, _| {
+            plane_normal_of(row_points(pts, i, hits), |_| 1.0)
         })
     }
 }
@@ -132,11 +145,12 @@ impl NormalEstimator for WeightedPlaneFit {
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
         let p = &self.params;
         let rule = p.sigma_rule;
-        estimate_per_point(cloud, ctx, p.k, 3, p.orient_k, |pts, row| {
-            let c = pts[row[0] as usize];
+        estimate_per_point_hits(cloud, ctx, p.k, 3, p.orient_k, |pts, i, hits, _| {
+            let c = pts[i];
+            let row = row_points(pts, i, hits);
             let dk2 = row
-                .iter()
-                .map(|&j| pts[j as usize].distance_squared(c))
+                .clone()
+                .map(|q| q.distance_squared(c))
                 .fold(0.0, f64::max);
             let sigma2 = match rule {
                 SigmaRule::ThirdSquare => dk2 / 3.0,
@@ -145,7 +159,7 @@ impl NormalEstimator for WeightedPlaneFit {
             if sigma2 <= 0.0 {
                 return DVec3::ZERO;
             }
-            fit_plane_normal(pts, row, |q| (-q.distance_squared(c) / sigma2).exp())
+            plane_normal_of(row, |q| (-q.distance_squared(c) / sigma2).exp())
         })
     }
 }
