@@ -185,6 +185,12 @@ impl Reconstructor for PriorityFront {
             fill_any_angle: p.fill_any_angle,
             sector_check: p.sector_check,
             revisit_passes: p.revisit_passes,
+            sin_elev: if p.free_elevation_max_deg >= 90.0 {
+                1.0
+            } else {
+                p.free_elevation_max_deg.to_radians().sin()
+            },
+            height_r: p.free_height_max / p.k,
         };
         let dcfg = DomainCfg {
             params: p,
@@ -289,7 +295,7 @@ impl Reconstructor for PriorityFront {
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} cross={}R free_inside={} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho cross={}R free_inside={} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -302,6 +308,8 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.restart_min_points,
         p.restart_radius_cap,
         p.restart_max_flatness,
+        p.free_elevation_max_deg,
+        p.free_height_max,
         p.cross_radius,
         p.reject_free_inside,
         p.threads

@@ -81,6 +81,18 @@ pub struct PriorityFrontParams {
     /// the paper, whose edges that fail once stay boundary forever; default 4). 0 = the
     /// paper's behaviour.
     pub revisit_passes: u32,
+    /// Largest elevation, degrees, of a *Free* candidate t above the mesh's tangent plane
+    /// at the edge midpoint (the plane normal is the sum of the fan normals of a and b):
+    /// `asin(|(t - o) . n_v| / |t - o|)` (IMPL-CHOICE I5, not in the paper; default 30).
+    /// Front points (link / glue / fill) are exempt. The paper's Rule 2 compares with the
+    /// one adjacent triangle only, so chains of tilted triangles grow into outlier clouds;
+    /// this robust reading of §4.4 keeps off-surface points out. 90 disables it.
+    pub free_elevation_max_deg: f64,
+    /// Largest height, in units of ρ, of a *Free* candidate above the same tangent plane
+    /// (IMPL-CHOICE I5, with the elevation bound; default 0.5). Bounds how far off the
+    /// surface a single accepted point can lie when it is the only candidate left.
+    /// 1000 disables it.
+    pub free_height_max: f64,
     /// Multi-seed restart while Free point patches remain (spec M8; default true).
     pub restart: bool,
     /// Minimum size of a Free point patch (R-graph component) that triggers a restart
@@ -126,6 +138,8 @@ impl Default for PriorityFrontParams {
             fill_any_angle: true,
             sector_check: true,
             revisit_passes: 4,
+            free_elevation_max_deg: 30.0,
+            free_height_max: 0.5,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -192,6 +206,18 @@ impl PriorityFrontParams {
         }
         if !(0.0..=1.0).contains(&self.restart_max_flatness) {
             return Err(bad("restart_max_flatness", "must be in [0, 1]"));
+        }
+        if !(self.free_elevation_max_deg > 0.0 && self.free_elevation_max_deg <= 90.0) {
+            return Err(bad(
+                "free_elevation_max_deg",
+                format!("must be in (0, 90], got {}", self.free_elevation_max_deg),
+            ));
+        }
+        if !(self.free_height_max > 0.0 && self.free_height_max <= 1000.0) {
+            return Err(bad(
+                "free_height_max",
+                format!("must be in (0, 1000], got {}", self.free_height_max),
+            ));
         }
         if self.revisit_passes > 1000 {
             return Err(bad("revisit_passes", "must be <= 1000"));
@@ -285,6 +311,16 @@ pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
         "revisit_passes",
         "count",
         "passes over the live front after the heap empties (I2: 4; 0 = paper)",
+    ),
+    (
+        "free_elevation_max_deg",
+        "deg",
+        "max elevation of a Free candidate above the fan tangent plane (I5: 30; 90 = off)",
+    ),
+    (
+        "free_height_max",
+        "spacing",
+        "max height of a Free candidate above the fan tangent plane, in rho (I5: 0.5)",
     ),
     (
         "restart",

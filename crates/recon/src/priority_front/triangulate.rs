@@ -135,7 +135,23 @@ impl Mesher<'_> {
         // ASSUMPTION A13: an existing edge {a,t} / {t,b} is allowed only when the
         // operation consumes it as the front edge t->a / b->t.
         let mut fill = false;
-        if self.state[t as usize] != FREE {
+        if self.state[t as usize] == FREE {
+            // IMPL-CHOICE I5: a Free point may not rise more than the elevation bound
+            // above the mesh's tangent plane at o (normal: fan normals of a and b).
+            if self.cfg.sin_elev < 1.0 || self.cfg.height_r < 1.0 {
+                let nv = self.vn[a as usize] + self.vn[b as usize];
+                let nv = if nv.length_squared() > 1e-24 {
+                    nv.normalize()
+                } else {
+                    n_old
+                };
+                let v = pt - o;
+                let lim = (self.cfg.sin_elev * v.length()).min(self.cfg.height_r * self.cfg.r);
+                if v.dot(nv).abs() > lim {
+                    return None;
+                }
+            }
+        } else {
             let ta = self.e_a[self.fin[a as usize] as usize] == t;
             let bt = self.e_b[self.fout[b as usize] as usize] == t;
             if (!ta && self.adj.has(a, t)) || (!bt && self.adj.has(b, t)) {
