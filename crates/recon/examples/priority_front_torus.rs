@@ -2,6 +2,9 @@
 //!
 //! `cargo run --release -p reconbench-recon --example priority_front_torus -- [points]
 //! [threads] [shape]` with shape `torus` (default), `sphere`, `sheet` or `two-sheets`.
+//! Environment: `RECON_PARAMS` (JSON parameters), `RECON_OUTLIERS` (fraction of uniform
+//! outliers), `RECON_SAMPLE_SEED` / `RECON_CTX_SEED` (default 7 / 1), `RECON_DUMP`
+//! (OBJ-like dump with `r` lines for refused points), `RECON_TOPOLOGY` (print topology).
 
 use std::time::Instant;
 
@@ -35,7 +38,13 @@ fn main() {
         _ => Surface::Torus(1.0, 0.35),
     };
     let t0 = Instant::now();
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let env_u64 = |k: &str, d: u64| {
+        std::env::var(k)
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(d)
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(env_u64("RECON_SAMPLE_SEED", 7));
     let pts = surf.sample_blue_noise(n, &mut rng);
     let mut pts = pts;
     let n_clean = pts.len();
@@ -65,7 +74,7 @@ fn main() {
         params.threads = threads;
     }
     let pf = PriorityFront::new(params).expect("params");
-    let mut ctx = RunCtx::new(1);
+    let mut ctx = RunCtx::new(env_u64("RECON_CTX_SEED", 1));
     let t1 = Instant::now();
     let rec = pf.reconstruct(&cloud, &mut ctx).expect("reconstruction");
     let secs = t1.elapsed().as_secs_f64();

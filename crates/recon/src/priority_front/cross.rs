@@ -67,6 +67,40 @@ pub(crate) fn crosses(
     false
 }
 
+/// True when a front vertex of `xs` (the first endpoint of each listed edge; other than
+/// the triangle's own vertices) projects strictly inside the triangle `tri` in the plane
+/// through `o` with unit normal `n` and lies within `r` of that plane. The triangle
+/// would then cover part of the front: a fold the edge-crossing test cannot see when
+/// the whole front piece lies inside the triangle.
+pub(crate) fn front_inside(
+    pts: &[DVec3],
+    xs: &[(u32, u32)],
+    n: DVec3,
+    o: DVec3,
+    r: f64,
+    tri: [u32; 3],
+) -> bool {
+    if xs.is_empty() {
+        return false;
+    }
+    let (u, v) = plane_basis(n);
+    let proj = |q: DVec3| {
+        let q = q - o;
+        [q.dot(u), q.dot(v)]
+    };
+    let t2 = tri.map(|i| proj(pts[i as usize]));
+    for &(x, _) in xs {
+        if tri.contains(&x) {
+            continue;
+        }
+        let p = pts[x as usize];
+        if (p - o).dot(n).abs() <= r && inside_2d(t2, proj(p)) {
+            return true;
+        }
+    }
+    false
+}
+
 /// True when `q` lies strictly inside the 2-D triangle `tri` (either orientation).
 pub(crate) fn inside_2d(tri: [[f64; 2]; 3], q: [f64; 2]) -> bool {
     let d0 = orient(tri[0], tri[1], q);

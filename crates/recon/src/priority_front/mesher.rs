@@ -42,6 +42,8 @@ pub(crate) struct Cfg {
     /// Crossing-test radius, in units of R.
     pub cross_factor: f64,
     pub reject_free_inside: bool,
+    /// IMPL-CHOICE I6: reject triangles that contain a front vertex in 2-D.
+    pub front_inside_check: bool,
     pub fill_any_angle: bool,
     pub sector_check: bool,
     pub revisit_passes: u32,
@@ -67,6 +69,7 @@ pub(crate) struct Stats {
     pub seeds: u64,
     pub fail_rules: u64,
     pub sector_rejects: u64,
+    pub holes_closed: u64,
 }
 
 impl Stats {
@@ -84,6 +87,7 @@ impl Stats {
         self.seeds += o.seeds;
         self.fail_rules += o.fail_rules;
         self.sector_rejects += o.sector_rejects;
+        self.holes_closed += o.holes_closed;
     }
 }
 

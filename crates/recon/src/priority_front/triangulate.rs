@@ -3,7 +3,7 @@
 use glam::DVec3;
 use reconbench_geom::method::{MethodError, RunCtx};
 
-use super::cross::{crosses, inside_2d, plane_basis};
+use super::cross::{crosses, front_inside, inside_2d, plane_basis};
 use super::grid::NONE;
 use super::mesher::{Cand, FREE, Mesher};
 
@@ -273,6 +273,13 @@ impl Mesher<'_> {
             return None;
         }
         if crosses(self.pts, &self.xs, np, o, self.cfg.r, &[(a, t), (t, b)]) {
+            self.stats.cross_rejects += 1;
+            return None;
+        }
+        // IMPL-CHOICE I6: no front vertex may lie inside the new triangle (a fold).
+        if self.cfg.front_inside_check
+            && front_inside(self.pts, &self.xs, np, o, self.cfg.r, [a, t, b])
+        {
             self.stats.cross_rejects += 1;
             return None;
         }
