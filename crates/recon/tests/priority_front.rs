@@ -317,7 +317,9 @@ fn two_threads_give_a_manifold_closed_torus() {
     let t = analyze(&rec.mesh);
     assert_manifold_oriented(&t);
     assert_eq!(t.components, 1, "{t:?}");
-    assert!(t.n_boundary_loops() <= 2, "{t:?}");
+    // The Free band along the slab cut lets the slab fronts meet: no strip holes.
+    assert!(t.watertight, "{t:?}");
+    assert_eq!(t.genus, Some(1));
 }
 
 #[test]

@@ -18,6 +18,7 @@ use std::collections::BinaryHeap;
 use glam::DVec3;
 
 use super::adjacency::Adjacency;
+use super::cross::XProj;
 use super::grid::{FrontIndex, Grid, NONE};
 
 /// Point state `Free` (spec §3.1; the transient `Close` state is the candidate buffer).
@@ -132,6 +133,8 @@ pub(crate) struct Mesher<'g> {
     pub cand: Vec<Cand>,
     pub free_near: Vec<u32>,
     pub xs: Vec<(u32, u32)>,
+    /// `xs` projected into the current validation plane (scratch).
+    pub xp: Vec<XProj>,
     pub stats: Stats,
     /// True during the revisit passes (IMPL-CHOICE I2/I3).
     pub revisiting: bool,
@@ -183,6 +186,7 @@ impl<'g> Mesher<'g> {
             cand: Vec::new(),
             free_near: Vec::new(),
             xs: Vec::new(),
+            xp: Vec::new(),
             stats: Stats::default(),
             revisiting: false,
         }

@@ -3,7 +3,9 @@
 use glam::DVec3;
 use reconbench_geom::method::{MethodError, RunCtx};
 
-use super::cross::{crosses, front_inside, inside_2d, plane_basis};
+use super::cross::{
+    crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project,
+};
 use super::grid::NONE;
 use super::mesher::{Cand, FREE, Mesher};
 
@@ -18,6 +20,23 @@ pub(crate) enum Op {
     GlueMirror(u32, DVec3, DVec3),
 }
 
+/// Per-edge constants of Steps 2-3, computed once per popped edge.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EdgeCtx {
+    pub a: u32,
+    pub b: u32,
+    pub pa: DVec3,
+    pub pb: DVec3,
+    /// Edge midpoint.
+    pub o: DVec3,
+    /// Unit normal of the triangle across the edge.
+    pub n_old: DVec3,
+    /// Unit edge direction.
+    pub ev: DVec3,
+    /// Unit fan normal at the edge (IMPL-CHOICE I5 reference plane).
+    pub nv: DVec3,
+}
+
 /// Steps between two `ctx.checkpoint()` polls.
 const CHECK_EVERY: u64 = 4096;
 
@@ -29,11 +48,18 @@ impl Mesher<'_> {
     fn shape_ok(&self, x: DVec3, y: DVec3, z: DVec3, apex: bool) -> Option<DVec3> {
         let c = self.cfg.cos_alpha;
         // angle > alpha_max  <=>  cos < cos(alpha_max); strict as the paper (§2).
+        let c2 = c * c;
         let ang_bad = |u: DVec3, v: DVec3| {
             let d = u.dot(v);
-            // cos(angle) < c  <=>  d < c |u||v|; squared compare when signs agree.
-            let m = c * (u.length_squared() * v.length_squared()).sqrt();
-            d < m
+            // cos(angle) < c  <=>  d < c |u||v|, decided on squares (no square root):
+            // for c < 0 it needs d < 0 and d^2 > c^2 |u|^2 |v|^2; for c >= 0 it holds
+            // when d < 0 or d^2 < c^2 |u|^2 |v|^2.
+            let m2 = c2 * u.length_squared() * v.length_squared();
+            if c < 0.0 {
+                d < 0.0 && d * d > m2
+            } else {
+                d < 0.0 || d * d < m2
+            }
         };
         if ang_bad(y - x, z - x) || ang_bad(x - z, y - z) {
             return None;
@@ -126,12 +152,18 @@ impl Mesher<'_> {
     /// Steps 2-3 for candidate `t`: the rules and the score. Returns the score and the
     /// unit normal of `(a, t, b)`, or `None` when a rule removes `t`.
     #[inline]
-    fn evaluate(&self, a: u32, b: u32, t: u32, o: DVec3, n_old: DVec3) -> Option<(f64, DVec3)> {
-        let (pa, pb, pt) = (
-            self.pts[a as usize],
-            self.pts[b as usize],
-            self.pts[t as usize],
-        );
+    fn evaluate(&self, x: &EdgeCtx, t: u32) -> Option<(f64, DVec3)> {
+        let EdgeCtx {
+            a,
+            b,
+            pa,
+            pb,
+            o,
+            n_old,
+            ev,
+            nv,
+        } = *x;
+        let pt = self.pts[t as usize];
         // ASSUMPTION A13: an existing edge {a,t} / {t,b} is allowed only when the
         // operation consumes it as the front edge t->a / b->t.
         let mut fill = false;
@@ -139,15 +171,11 @@ impl Mesher<'_> {
             // IMPL-CHOICE I5: a Free point may not rise more than the elevation bound
             // above the mesh's tangent plane at o (normal: fan normals of a and b).
             if self.cfg.sin_elev < 1.0 || self.cfg.height_r < 1.0 {
-                let nv = self.vn[a as usize] + self.vn[b as usize];
-                let nv = if nv.length_squared() > 1e-24 {
-                    nv.normalize()
-                } else {
-                    n_old
-                };
                 let v = pt - o;
-                let lim = (self.cfg.sin_elev * v.length()).min(self.cfg.height_r * self.cfg.r);
-                if v.dot(nv).abs() > lim {
+                let h = v.dot(nv).abs();
+                // Squared compare of h > sin_elev |v| first (no square root).
+                let se = self.cfg.sin_elev;
+                if h > self.cfg.height_r * self.cfg.r || h * h > se * se * v.length_squared() {
                     return None;
                 }
             }
@@ -181,7 +209,6 @@ impl Mesher<'_> {
         }
         let r = self.cfg.r;
         let v = pt - o;
-        let ev = (pb - pa).normalize();
         let vl = v.length();
         let v_perp = v - v.dot(ev) * ev;
         let cos_g = if vl > 0.0 { v_perp.length() / vl } else { 0.0 };
@@ -221,6 +248,21 @@ impl Mesher<'_> {
         let (pa, pb) = (self.pts[a as usize], self.pts[b as usize]);
         let o = (pa + pb) * 0.5;
         let n_old = self.e_nrm[e as usize];
+        let nv = self.vn[a as usize] + self.vn[b as usize];
+        let x = EdgeCtx {
+            a,
+            b,
+            pa,
+            pb,
+            o,
+            n_old,
+            ev: (pb - pa).normalize(),
+            nv: if nv.length_squared() > 1e-24 {
+                nv.normalize()
+            } else {
+                n_old
+            },
+        };
         self.gather(e, a, b, o);
         if self.revisiting {
             self.add_front_neighbours(a, b);
@@ -229,7 +271,7 @@ impl Mesher<'_> {
         let mut k = 0;
         while k < self.cand.len() {
             let t = self.cand[k].t;
-            if let Some((s, n)) = self.evaluate(a, b, t, o, n_old) {
+            if let Some((s, n)) = self.evaluate(&x, t) {
                 self.cand[k].score = s;
                 self.cand[k].n_new = n;
                 k += 1;
@@ -239,7 +281,7 @@ impl Mesher<'_> {
         }
         for k in 0..self.free_near.len() {
             let t = self.free_near[k];
-            if let Some((score, n_new)) = self.evaluate(a, b, t, o, n_old) {
+            if let Some((score, n_new)) = self.evaluate(&x, t) {
                 self.cand.push(Cand { t, score, n_new });
             }
         }
@@ -272,13 +314,20 @@ impl Mesher<'_> {
             self.stats.sector_rejects += 1;
             return None;
         }
-        if crosses(self.pts, &self.xs, np, o, self.cfg.r, &[(a, t), (t, b)]) {
+        // The nearby front edges are projected once for both tests.
+        let (u, v) = plane_basis(np);
+        project(self.pts, &self.xs, u, v, np, o, self.cfg.r, &mut self.xp);
+        let pr = |i: u32| {
+            let q = self.pts[i as usize] - o;
+            [q.dot(u), q.dot(v)]
+        };
+        let (qa, qt, qb) = (pr(a), pr(t), pr(b));
+        if crosses_projected(&self.xp, &[(a, qa, t, qt), (t, qt, b, qb)]) {
             self.stats.cross_rejects += 1;
             return None;
         }
         // IMPL-CHOICE I6: no front vertex may lie inside the new triangle (a fold).
-        if self.cfg.front_inside_check
-            && front_inside(self.pts, &self.xs, np, o, self.cfg.r, [a, t, b])
+        if self.cfg.front_inside_check && front_inside_projected(&self.xp, [a, t, b], [qa, qt, qb])
         {
             self.stats.cross_rejects += 1;
             return None;
