@@ -132,6 +132,8 @@ pub(crate) struct Mesher<'g> {
     pub fidx: FrontIndex,
     pub cand: Vec<Cand>,
     pub free_near: Vec<u32>,
+    /// Pending candidates `(score bound, point)` of the lazy evaluation (scratch).
+    pub pend: Vec<(f64, u32)>,
     pub xs: Vec<(u32, u32)>,
     /// `xs` projected into the current validation plane (scratch).
     pub xp: Vec<XProj>,
@@ -185,6 +187,7 @@ impl<'g> Mesher<'g> {
             fidx,
             cand: Vec::new(),
             free_near: Vec::new(),
+            pend: Vec::new(),
             xs: Vec::new(),
             xp: Vec::new(),
             stats: Stats::default(),

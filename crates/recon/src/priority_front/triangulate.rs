@@ -267,42 +267,96 @@ impl Mesher<'_> {
         if self.revisiting {
             self.add_front_neighbours(a, b);
         }
-        // Step 2-3 over front candidates (already in `cand`) and Free points.
-        let mut k = 0;
-        while k < self.cand.len() {
-            let t = self.cand[k].t;
-            if let Some((s, n)) = self.evaluate(&x, t) {
-                self.cand[k].score = s;
-                self.cand[k].n_new = n;
-                k += 1;
-            } else {
-                self.cand.swap_remove(k);
-            }
+        // Steps 2-4, lazily. Every candidate's score is bounded above by
+        // U(t) = w1 + w2 + w3 (R - d(t))/R (cos beta, cos gamma <= 1), known from its
+        // distance alone. Candidates are evaluated in decreasing U; the best evaluated
+        // one is validated as soon as its exact score is strictly above the U of every
+        // unevaluated candidate. The validation order is therefore exactly that of the
+        // full evaluation (decreasing score, ties by lower index), but most candidates
+        // of an edge are never evaluated, because the first validated one usually wins.
+        let mut pend = std::mem::take(&mut self.pend);
+        pend.clear();
+        for c in &self.cand {
+            pend.push((self.score_bound(&x, c.t), c.t));
         }
-        for k in 0..self.free_near.len() {
-            let t = self.free_near[k];
-            if let Some((score, n_new)) = self.evaluate(&x, t) {
-                self.cand.push(Cand { t, score, n_new });
-            }
+        for &t in &self.free_near {
+            pend.push((self.score_bound(&x, t), t));
         }
-        if self.cand.is_empty() {
-            self.stats.fail_rules += 1;
-        }
-        // Step 4: pop candidates by decreasing score (ties: lower index) and validate.
-        while !self.cand.is_empty() {
-            let mut best = 0;
-            for k in 1..self.cand.len() {
-                let (c, bc) = (&self.cand[k], &self.cand[best]);
-                if c.score > bc.score || (c.score == bc.score && c.t < bc.t) {
-                    best = k;
+        self.cand.clear();
+        let mut passed = 0usize;
+        let mut result = None;
+        let mut best_score = f64::NEG_INFINITY;
+        loop {
+            // Evaluate (largest bound first; a linear scan, as only a few are taken)
+            // until the best evaluated score beats every pending bound.
+            while !pend.is_empty() {
+                let mut m = 0;
+                for k in 1..pend.len() {
+                    if pend[k].0 > pend[m].0 {
+                        m = k;
+                    }
+                }
+                if best_score > pend[m].0 {
+                    break;
+                }
+                let t = pend.swap_remove(m).1;
+                if let Some((score, n_new)) = self.evaluate(&x, t) {
+                    passed += 1;
+                    best_score = best_score.max(score);
+                    self.cand.push(Cand { t, score, n_new });
                 }
             }
+            let Some(best) = self.best_cand() else {
+                break;
+            };
             let c = self.cand.swap_remove(best);
             if let Some(op) = self.validate(e, a, b, o, n_old, c) {
-                return Some(op);
+                result = Some(op);
+                break;
+            }
+            best_score = self
+                .best_cand()
+                .map_or(f64::NEG_INFINITY, |k| self.cand[k].score);
+        }
+        if passed == 0 {
+            self.stats.fail_rules += 1;
+        }
+        self.pend = pend;
+        result
+    }
+
+    /// Index in `cand` of the best candidate: highest score, ties by lower point index.
+    #[inline]
+    fn best_cand(&self) -> Option<usize> {
+        if self.cand.is_empty() {
+            return None;
+        }
+        let mut best = 0;
+        for k in 1..self.cand.len() {
+            let (c, bc) = (&self.cand[k], &self.cand[best]);
+            if c.score > bc.score || (c.score == bc.score && c.t < bc.t) {
+                best = k;
             }
         }
-        None
+        Some(best)
+    }
+
+    /// Upper bound of the score C(t) of Eq. 8 from the distance term alone (cos beta and
+    /// cos gamma are at most 1), with a relative slack against rounding.
+    #[inline]
+    fn score_bound(&self, x: &EdgeCtx, t: u32) -> f64 {
+        let pt = self.pts[t as usize];
+        let r = self.cfg.r;
+        let d = if self.cfg.seg_dist {
+            let (pa, pb) = (x.pa, x.pb);
+            let s = (pt - pa).dot(pb - pa) / (pb - pa).length_squared();
+            (pt - (pa + (pb - pa) * s.clamp(0.0, 1.0))).length()
+        } else {
+            (pt - x.o).length()
+        };
+        let w = self.cfg.w;
+        let u = w[0] + w[1] + w[2] * ((r - d) / r).max(0.0);
+        u + 1e-9 * (w[0] + w[1] + w[2])
     }
 
     /// Crossing test and classification of candidate `c` (§4.4 Step 4, §4.5).
@@ -508,16 +562,72 @@ impl Mesher<'_> {
     }
 }
 
-/// Clockwise angle in [0, 2 pi) from 2-D direction `s` to `d`.
+/// Clockwise angle from 2-D direction `s` to `d`, as a *pseudo-angle* in [0, 4): a
+/// strictly increasing function of the true clockwise angle in [0, 2 pi) with 0 <-> 0
+/// ("diamond angle", no trigonometry). Callers only compare such values, so the sector
+/// tests decide exactly as with `atan2`.
 #[inline]
 fn cw_angle(s: [f64; 2], d: [f64; 2]) -> f64 {
+    // Counter-clockwise angle of d relative to s: the direction (dt, cr).
     let cr = s[0] * d[1] - s[1] * d[0];
     let dt = s[0] * d[0] + s[1] * d[1];
-    let th = cr.atan2(dt);
-    if th <= 0.0 {
-        -th
+    let p = diamond(dt, cr);
+    if p == 0.0 { 0.0 } else { 4.0 - p }
+}
+
+/// Pseudo-angle of the direction `(x, y)` in [0, 4), increasing with `atan2(y, x)` taken
+/// in [0, 2 pi); 0 for the zero vector (as `atan2(0, 0) = 0`).
+#[inline]
+fn diamond(x: f64, y: f64) -> f64 {
+    if x == 0.0 && y == 0.0 {
+        return 0.0;
+    }
+    if y >= 0.0 {
+        if x >= 0.0 {
+            y / (x + y)
+        } else {
+            1.0 + (-x) / (y - x)
+        }
+    } else if x < 0.0 {
+        2.0 + (-y) / (-x - y)
     } else {
-        std::f64::consts::TAU - th
+        3.0 + x / (x - y)
+    }
+}
+
+#[cfg(test)]
+mod angle_tests {
+    use super::*;
+
+    /// The pseudo-angle orders directions exactly as the clockwise `atan2` angle.
+    #[test]
+    fn pseudo_angle_is_monotone_in_the_true_angle() {
+        let true_cw = |s: [f64; 2], d: [f64; 2]| {
+            let th = (s[0] * d[1] - s[1] * d[0]).atan2(s[0] * d[0] + s[1] * d[1]);
+            if th <= 0.0 {
+                -th
+            } else {
+                std::f64::consts::TAU - th
+            }
+        };
+        let s = [0.6, -0.8];
+        let dirs: Vec<[f64; 2]> = (0..720)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 720.0 + 0.001;
+                [a.cos() * 2.0, a.sin() * 2.0]
+            })
+            .collect();
+        for x in &dirs {
+            for y in &dirs {
+                let (tx, ty) = (true_cw(s, *x), true_cw(s, *y));
+                let (px, py) = (cw_angle(s, *x), cw_angle(s, *y));
+                if (tx - ty).abs() > 1e-9 {
+                    assert_eq!(tx < ty, px < py, "{x:?} {y:?}");
+                }
+            }
+        }
+        assert_eq!(cw_angle(s, s), 0.0);
+        assert_eq!(cw_angle(s, [0.0, 0.0]), 0.0);
     }
 }
 
