@@ -75,9 +75,17 @@ fn main() {
     }
     let pf = PriorityFront::new(params).expect("params");
     let mut ctx = RunCtx::new(env_u64("RECON_CTX_SEED", 1));
+    let cpu0 = process_cpu_seconds();
     let t1 = Instant::now();
     let rec = pf.reconstruct(&cloud, &mut ctx).expect("reconstruction");
     let secs = t1.elapsed().as_secs_f64();
+    if let (Some(c0), Some(c1)) = (cpu0, process_cpu_seconds()) {
+        println!(
+            "  reconstruct CPU time (all threads): {:.3} s = {:.0} triangles per CPU-second",
+            c1 - c0,
+            rec.mesh.n_faces() as f64 / (c1 - c0).max(1e-9)
+        );
+    }
     let nf = rec.mesh.n_faces();
     println!(
         "{shape}: {n} points, {threads} thread(s): {nf} triangles in {secs:.3} s = {:.0} triangles/s",
@@ -133,4 +141,16 @@ fn main() {
             t.components
         );
     }
+}
+
+/// User + system CPU time of this process (all threads) from `/proc/self/stat`, in
+/// seconds (Linux; `None` elsewhere). Assumes the usual 100 clock ticks per second.
+fn process_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14, 15.
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ut: f64 = f.get(11)?.parse().ok()?;
+    let st: f64 = f.get(12)?.parse().ok()?;
+    Some((ut + st) / 100.0)
 }
