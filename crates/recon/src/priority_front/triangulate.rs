@@ -595,6 +595,17 @@ fn diamond(x: f64, y: f64) -> f64 {
     }
 }
 
+/// Projection-plane normal `normalize(n1 + n2)`, falling back to `n1` (A14).
+#[inline]
+pub(crate) fn plane_normal(n1: DVec3, n2: DVec3) -> DVec3 {
+    let s = n1 + n2;
+    if s.length_squared() > 1e-12 {
+        s.normalize()
+    } else {
+        n1
+    }
+}
+
 #[cfg(test)]
 mod angle_tests {
     use super::*;
@@ -628,16 +639,5 @@ mod angle_tests {
         }
         assert_eq!(cw_angle(s, s), 0.0);
         assert_eq!(cw_angle(s, [0.0, 0.0]), 0.0);
-    }
-}
-
-/// Projection-plane normal `normalize(n1 + n2)`, falling back to `n1` (A14).
-#[inline]
-pub(crate) fn plane_normal(n1: DVec3, n2: DVec3) -> DVec3 {
-    let s = n1 + n2;
-    if s.length_squared() > 1e-12 {
-        s.normalize()
-    } else {
-        n1
     }
 }
