@@ -458,7 +458,10 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             o.distance.vertex_error = true;
             let ev = eval_mesh(&r.mesh, &reference, &o).map_err(|e| format!("metrics: {e}"))?;
             out.metrics = keep_metrics(ev.to_row());
-            out.metrics.insert("refused".into(), r.refused.len() as f64);
+            // Refused points against the generator's outliers (seed 001 §4.4).
+            let re = reconbench_metrics::eval_refused(&r.refused, &data.is_outlier)
+                .map_err(|e| format!("metrics: {e}"))?;
+            out.metrics.extend(keep_metrics(re.to_row()));
             let verr: Vec<f64> = match &ev.distance.vertex_error {
                 Some(v) if v.len() == r.mesh.n_vertices() => v.iter().map(|x| x / diag).collect(),
                 _ => r

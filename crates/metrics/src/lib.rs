@@ -9,6 +9,7 @@
 //! * [`topology`]: geom's topology analysis plus Delta F, `topology_ok` and
 //!   self-intersections.
 //! * [`quality`]: triangle angles, aspect ratios, edge lengths.
+//! * [`refused`]: refused-point precision / recall against the generator's outliers.
 //! * [`cost`]: per-phase timer, CPU time, peak RSS.
 //! * [`eval`]: the entry points the CLI wraps (`eval_mesh`, `eval_cloud_normals`,
 //!   `eval_cloud_features`).
@@ -24,6 +25,7 @@ pub mod features;
 pub mod normals;
 pub mod quality;
 pub mod reference;
+pub mod refused;
 pub mod report;
 pub mod sampling;
 pub mod stats;
@@ -41,6 +43,7 @@ pub use features::{
 pub use normals::{NormalEval, NormalGroundTruth, NormalOptions, eval_cloud_normals, eval_normals};
 pub use quality::{QualityEval, QualityOptions, eval_quality};
 pub use reference::{Reference, SurfaceHit};
+pub use refused::{RefusedEval, eval_refused};
 pub use report::{Report, Value};
 pub use stats::Summary;
 pub use topology::{TopologyEval, TopologyOptions, count_self_intersections, eval_topology};

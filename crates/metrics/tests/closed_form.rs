@@ -716,4 +716,8 @@ fn every_reported_key_is_documented() {
     for (k, _) in f.entries() {
         check(&k);
     }
+    let r = reconbench_metrics::eval_refused(&[0], &[true, false]).unwrap();
+    for (k, _) in r.entries() {
+        check(&k);
+    }
 }

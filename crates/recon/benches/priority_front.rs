@@ -1,6 +1,8 @@
 //! Criterion bench of `priority-front` on a blue-noise torus.
 //! Size via `RECON_BENCH_POINTS` (default 100000); threads via `RECON_BENCH_THREADS`
-//! (default 1).
+//! (default 1). The issue-8 case (1M points, 2 threads):
+//! `RECON_BENCH_POINTS=1000000 RECON_BENCH_THREADS=2 cargo bench -p reconbench-recon
+//! --bench priority_front`. Measured figures are in docs/methods/priority_front.md.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::SeedableRng;

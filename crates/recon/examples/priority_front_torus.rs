@@ -2,6 +2,9 @@
 //!
 //! `cargo run --release -p reconbench-recon --example priority_front_torus -- [points]
 //! [threads] [shape]` with shape `torus` (default), `sphere`, `sheet` or `two-sheets`.
+//! Environment: `RECON_PARAMS` (JSON parameters), `RECON_OUTLIERS` (fraction of uniform
+//! outliers), `RECON_SAMPLE_SEED` / `RECON_CTX_SEED` (default 7 / 1), `RECON_DUMP`
+//! (OBJ-like dump with `r` lines for refused points), `RECON_TOPOLOGY` (print topology).
 
 use std::time::Instant;
 
@@ -35,7 +38,13 @@ fn main() {
         _ => Surface::Torus(1.0, 0.35),
     };
     let t0 = Instant::now();
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let env_u64 = |k: &str, d: u64| {
+        std::env::var(k)
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(d)
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(env_u64("RECON_SAMPLE_SEED", 7));
     let pts = surf.sample_blue_noise(n, &mut rng);
     let mut pts = pts;
     let n_clean = pts.len();
@@ -65,10 +74,18 @@ fn main() {
         params.threads = threads;
     }
     let pf = PriorityFront::new(params).expect("params");
-    let mut ctx = RunCtx::new(1);
+    let mut ctx = RunCtx::new(env_u64("RECON_CTX_SEED", 1));
+    let cpu0 = process_cpu_seconds();
     let t1 = Instant::now();
     let rec = pf.reconstruct(&cloud, &mut ctx).expect("reconstruction");
     let secs = t1.elapsed().as_secs_f64();
+    if let (Some(c0), Some(c1)) = (cpu0, process_cpu_seconds()) {
+        println!(
+            "  reconstruct CPU time (all threads): {:.3} s = {:.0} triangles per CPU-second",
+            c1 - c0,
+            rec.mesh.n_faces() as f64 / (c1 - c0).max(1e-9)
+        );
+    }
     let nf = rec.mesh.n_faces();
     println!(
         "{shape}: {n} points, {threads} thread(s): {nf} triangles in {secs:.3} s = {:.0} triangles/s",
@@ -124,4 +141,16 @@ fn main() {
             t.components
         );
     }
+}
+
+/// User + system CPU time of this process (all threads) from `/proc/self/stat`, in
+/// seconds (Linux; `None` elsewhere). Assumes the usual 100 clock ticks per second.
+fn process_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14, 15.
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ut: f64 = f.get(11)?.parse().ok()?;
+    let st: f64 = f.get(12)?.parse().ok()?;
+    Some((ut + st) / 100.0)
 }

@@ -307,7 +307,7 @@ pub fn entries() -> Vec<MethodEntry> {
         reconstruct::<PriorityFrontParams>(
             "priority-front",
             "seed 001 §4",
-            "priority-driven advancing front (Li, Han & Wee); partial, see docs/methods/priority_front.md",
+            "priority-driven advancing front (Li, Han & Wee); deviations in docs/methods/priority_front.md",
             docs_from_tuples(reconbench_recon::priority_front::PARAM_DOCS),
             |p, _| Ok(Box::new(PriorityFront::new(p)?)),
         ),

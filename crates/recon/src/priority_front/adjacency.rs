@@ -90,6 +90,17 @@ impl Adjacency {
         false
     }
 
+    /// Number of mesh neighbours of front vertex `u`.
+    pub fn degree(&self, u: u32) -> usize {
+        let mut b = self.head[u as usize];
+        let mut d = 0;
+        while b != NONE {
+            d += self.len[b as usize] as usize;
+            b = self.next[b as usize];
+        }
+        d
+    }
+
     /// Frees the list of `u` (it left the front).
     pub fn release(&mut self, u: u32) {
         let mut b = self.head[u as usize];

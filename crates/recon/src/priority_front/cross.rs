@@ -67,6 +67,88 @@ pub(crate) fn crosses(
     false
 }
 
+/// A front edge `x -> y` projected into a validation plane.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct XProj {
+    pub x: u32,
+    pub y: u32,
+    pub p: [f64; 2],
+    pub q: [f64; 2],
+    /// `x` lies within `r` of the plane.
+    pub near_x: bool,
+    /// At least one endpoint lies within `r` of the plane.
+    pub near: bool,
+}
+
+/// Projects the front edges `xs` into the plane through `o` with orthonormal basis
+/// `(u, v)` and unit normal `n` (into `out`, reused).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project(
+    pts: &[DVec3],
+    xs: &[(u32, u32)],
+    u: DVec3,
+    v: DVec3,
+    n: DVec3,
+    o: DVec3,
+    r: f64,
+    out: &mut Vec<XProj>,
+) {
+    out.clear();
+    for &(x, y) in xs {
+        let (px, py) = (pts[x as usize] - o, pts[y as usize] - o);
+        let near_x = px.dot(n).abs() <= r;
+        out.push(XProj {
+            x,
+            y,
+            p: [px.dot(u), px.dot(v)],
+            q: [py.dot(u), py.dot(v)],
+            near_x,
+            near: near_x || py.dot(n).abs() <= r,
+        });
+    }
+}
+
+/// [`crosses`] on edges projected by [`project`]: true when a tentative edge
+/// `(s0, p0, s1, p1)` (ids and projected endpoints) properly crosses a projected front
+/// edge. Front edges sharing an endpoint with the tentative edge, and those with both
+/// endpoints farther than `r` from the plane, are skipped; a bounding-box test comes
+/// before the orientation tests.
+pub(crate) fn crosses_projected(
+    xp: &[XProj],
+    new_edges: &[(u32, [f64; 2], u32, [f64; 2])],
+) -> bool {
+    for &(s0, p0, s1, p1) in new_edges {
+        let (lo0, hi0) = (p0[0].min(p1[0]), p0[0].max(p1[0]));
+        let (lo1, hi1) = (p0[1].min(p1[1]), p0[1].max(p1[1]));
+        for e in xp {
+            if e.p[0].max(e.q[0]) < lo0
+                || e.p[0].min(e.q[0]) > hi0
+                || e.p[1].max(e.q[1]) < lo1
+                || e.p[1].min(e.q[1]) > hi1
+            {
+                continue;
+            }
+            if !e.near || e.x == s0 || e.x == s1 || e.y == s0 || e.y == s1 {
+                continue;
+            }
+            if proper(p0, p1, e.p, e.q) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// True when a front vertex (the first endpoint of each projected edge, other than the
+/// triangle's own vertices) within `r` of the plane projects strictly inside the
+/// projected triangle `t2` with ids `tri`. The triangle would then cover part of the
+/// front: a fold the edge-crossing test cannot see when the whole front piece lies
+/// inside the triangle.
+pub(crate) fn front_inside_projected(xp: &[XProj], tri: [u32; 3], t2: [[f64; 2]; 3]) -> bool {
+    xp.iter()
+        .any(|e| e.near_x && !tri.contains(&e.x) && inside_2d(t2, e.p))
+}
+
 /// True when `q` lies strictly inside the 2-D triangle `tri` (either orientation).
 pub(crate) fn inside_2d(tri: [[f64; 2]; 3], q: [f64; 2]) -> bool {
     let d0 = orient(tri[0], tri[1], q);

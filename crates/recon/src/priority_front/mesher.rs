@@ -18,6 +18,7 @@ use std::collections::BinaryHeap;
 use glam::DVec3;
 
 use super::adjacency::Adjacency;
+use super::cross::XProj;
 use super::grid::{FrontIndex, Grid, NONE};
 
 /// Point state `Free` (spec §3.1; the transient `Close` state is the candidate buffer).
@@ -42,9 +43,15 @@ pub(crate) struct Cfg {
     /// Crossing-test radius, in units of R.
     pub cross_factor: f64,
     pub reject_free_inside: bool,
+    /// IMPL-CHOICE I6: reject triangles that contain a front vertex in 2-D.
+    pub front_inside_check: bool,
     pub fill_any_angle: bool,
     pub sector_check: bool,
     pub revisit_passes: u32,
+    /// sin of the largest elevation of a Free candidate (IMPL-CHOICE I5); >= 1 = off.
+    pub sin_elev: f64,
+    /// Largest height of a Free candidate in units of R (IMPL-CHOICE I5).
+    pub height_r: f64,
 }
 
 /// Operation counters (diagnostics).
@@ -63,6 +70,7 @@ pub(crate) struct Stats {
     pub seeds: u64,
     pub fail_rules: u64,
     pub sector_rejects: u64,
+    pub holes_closed: u64,
 }
 
 impl Stats {
@@ -80,6 +88,7 @@ impl Stats {
         self.seeds += o.seeds;
         self.fail_rules += o.fail_rules;
         self.sector_rejects += o.sector_rejects;
+        self.holes_closed += o.holes_closed;
     }
 }
 
@@ -117,11 +126,17 @@ pub(crate) struct Mesher<'g> {
     heap: BinaryHeap<HeapItem>,
     fifo: u64,
     pub tris: Vec<[u32; 3]>,
+    /// Per point: sum of the unit normals of its triangles (fan normal, IMPL-CHOICE I5).
+    pub vn: Vec<DVec3>,
     pub adj: Adjacency,
     pub fidx: FrontIndex,
     pub cand: Vec<Cand>,
     pub free_near: Vec<u32>,
+    /// Pending candidates `(score bound, point)` of the lazy evaluation (scratch).
+    pub pend: Vec<(f64, u32)>,
     pub xs: Vec<(u32, u32)>,
+    /// `xs` projected into the current validation plane (scratch).
+    pub xp: Vec<XProj>,
     pub stats: Stats,
     /// True during the revisit passes (IMPL-CHOICE I2/I3).
     pub revisiting: bool,
@@ -167,14 +182,28 @@ impl<'g> Mesher<'g> {
             heap: BinaryHeap::new(),
             fifo: 0,
             tris: Vec::new(),
+            vn: vec![DVec3::ZERO; n],
             adj: Adjacency::new(n),
             fidx,
             cand: Vec::new(),
             free_near: Vec::new(),
+            pend: Vec::new(),
             xs: Vec::new(),
+            xp: Vec::new(),
             stats: Stats::default(),
             revisiting: false,
         }
+    }
+
+    /// Appends triangle `t` to L and adds its unit normal to its vertices' fan normals.
+    #[inline]
+    pub fn add_tri(&mut self, t: [u32; 3]) {
+        let p = t.map(|i| self.pts[i as usize]);
+        let n = tri_normal(p[0], p[1], p[2]);
+        for &v in &t {
+            self.vn[v as usize] += n;
+        }
+        self.tris.push(t);
     }
 
     /// True when `v` has front edges.
@@ -283,7 +312,7 @@ impl<'g> Mesher<'g> {
     pub fn add_seed(&mut self, v: [u32; 3]) {
         let p = v.map(|i| self.pts[i as usize]);
         let n = tri_normal(p[0], p[1], p[2]);
-        self.tris.push(v);
+        self.add_tri(v);
         for k in 0..3 {
             self.state[v[k] as usize] = ACCEPTED;
             self.fidx.insert(v[k], p[k]);
@@ -305,7 +334,7 @@ impl<'g> Mesher<'g> {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let t = cost(n_new, self.e_nrm[e as usize]);
         let (zp, bn) = (self.e_prev[e as usize], self.e_next[e as usize]);
-        self.tris.push([a, p, b]);
+        self.add_tri([a, p, b]);
         self.state[p as usize] = ACCEPTED;
         self.fidx.insert(p, self.pts[p as usize]);
         self.adj.add(a, p);
@@ -325,7 +354,7 @@ impl<'g> Mesher<'g> {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let bp = self.fout[b as usize];
         let pa = self.fout[p as usize];
-        self.tris.push([a, p, b]);
+        self.add_tri([a, p, b]);
         self.kill_edge(e);
         self.kill_edge(bp);
         self.kill_edge(pa);
@@ -341,7 +370,7 @@ impl<'g> Mesher<'g> {
         let t = cost(n_new, self.e_nrm[e as usize]);
         let f = self.fout[b as usize];
         let (zp, pn) = (self.e_prev[e as usize], self.e_next[f as usize]);
-        self.tris.push([a, p, b]);
+        self.add_tri([a, p, b]);
         self.adj.add(a, p);
         self.kill_edge(e);
         self.kill_edge(f);
@@ -359,7 +388,7 @@ impl<'g> Mesher<'g> {
         let t = cost(n_new, self.e_nrm[e as usize]);
         let g = self.fin[a as usize];
         let (zp, bn) = (self.e_prev[g as usize], self.e_next[e as usize]);
-        self.tris.push([a, p, b]);
+        self.add_tri([a, p, b]);
         self.adj.add(p, b);
         self.kill_edge(g);
         self.kill_edge(e);
@@ -380,8 +409,8 @@ impl<'g> Mesher<'g> {
         let t2 = cost(n2, self.e_nrm[g as usize]);
         let (zp, bn) = (self.e_prev[e as usize], self.e_next[e as usize]);
         let (qprev, py) = (self.e_prev[g as usize], self.e_next[g as usize]);
-        self.tris.push([a, p, b]);
-        self.tris.push([p, q, b]);
+        self.add_tri([a, p, b]);
+        self.add_tri([p, q, b]);
         self.adj.add(a, p);
         self.adj.add(p, b);
         self.adj.add(q, b);
@@ -406,8 +435,8 @@ impl<'g> Mesher<'g> {
         let t2 = cost(n2, self.e_nrm[h as usize]);
         let (zp, bn) = (self.e_prev[e as usize], self.e_next[e as usize]);
         let (qp, ys) = (self.e_prev[h as usize], self.e_next[h as usize]);
-        self.tris.push([a, p, b]);
-        self.tris.push([a, y, p]);
+        self.add_tri([a, p, b]);
+        self.add_tri([a, y, p]);
         self.adj.add(a, p);
         self.adj.add(p, b);
         self.adj.add(a, y);
@@ -455,7 +484,9 @@ impl<'g> Mesher<'g> {
         accepted: &[u32],
         edges: &[(u32, u32, u32, DVec3, f64)],
     ) {
-        self.tris.extend_from_slice(tris);
+        for &t in tris {
+            self.add_tri(t);
+        }
         for &v in accepted {
             self.state[v as usize] = ACCEPTED;
         }

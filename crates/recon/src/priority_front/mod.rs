@@ -24,6 +24,7 @@ mod adjacency;
 mod cross;
 mod density;
 mod grid;
+mod holes;
 mod mesher;
 mod parallel;
 pub mod params;
@@ -182,9 +183,16 @@ impl Reconstructor for PriorityFront {
             glue_mirror: p.glue_mirror,
             cross_factor: p.cross_radius,
             reject_free_inside: p.reject_free_inside,
+            front_inside_check: p.front_inside_check,
             fill_any_angle: p.fill_any_angle,
             sector_check: p.sector_check,
             revisit_passes: p.revisit_passes,
+            sin_elev: if p.free_elevation_max_deg >= 90.0 {
+                1.0
+            } else {
+                p.free_elevation_max_deg.to_radians().sin()
+            },
+            height_r: p.free_height_max / p.k,
         };
         let dcfg = DomainCfg {
             params: p,
@@ -199,6 +207,7 @@ impl Reconstructor for PriorityFront {
         let grown = if p.threads <= 1 {
             let mut m = Mesher::new(&pts, &grid, cfg, &refused0);
             m.run_domain(&dcfg, &mut rng, ctx)?;
+            m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
             end_phase(ctx, "grow", t_grow);
             Grown {
                 loops: m.loops(),
@@ -224,6 +233,7 @@ impl Reconstructor for PriorityFront {
             m.grow(ctx)?;
             // Restarts over the whole cloud for what the slabs left.
             m.restarts(&dcfg, &mut rng, ctx)?;
+            m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
             end_phase(ctx, "stitch", t_st);
             Grown {
                 loops: m.loops(),
@@ -265,6 +275,7 @@ impl Reconstructor for PriorityFront {
         num(&mut diag, "fail_rules", s.fail_rules as f64);
         num(&mut diag, "sector_rejects", s.sector_rejects as f64);
         num(&mut diag, "boundary_loops", grown.loops.len() as f64);
+        num(&mut diag, "holes_closed", s.holes_closed as f64);
         diag.insert(
             "boundary_loop_sizes".into(),
             Diagnostic::Series(grown.loops.iter().map(|l| l.len() as f64).collect()),
@@ -289,7 +300,7 @@ impl Reconstructor for PriorityFront {
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} cross={}R free_inside={} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho cross={}R free_inside={} I6=front_inside:{} I7=close<={} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -302,8 +313,12 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.restart_min_points,
         p.restart_radius_cap,
         p.restart_max_flatness,
+        p.free_elevation_max_deg,
+        p.free_height_max,
         p.cross_radius,
         p.reject_free_inside,
+        p.front_inside_check,
+        p.close_holes_max,
         p.threads
     )
 }

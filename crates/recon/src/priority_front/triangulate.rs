@@ -3,7 +3,9 @@
 use glam::DVec3;
 use reconbench_geom::method::{MethodError, RunCtx};
 
-use super::cross::{crosses, inside_2d, plane_basis};
+use super::cross::{
+    crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project,
+};
 use super::grid::NONE;
 use super::mesher::{Cand, FREE, Mesher};
 
@@ -18,6 +20,23 @@ pub(crate) enum Op {
     GlueMirror(u32, DVec3, DVec3),
 }
 
+/// Per-edge constants of Steps 2-3, computed once per popped edge.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EdgeCtx {
+    pub a: u32,
+    pub b: u32,
+    pub pa: DVec3,
+    pub pb: DVec3,
+    /// Edge midpoint.
+    pub o: DVec3,
+    /// Unit normal of the triangle across the edge.
+    pub n_old: DVec3,
+    /// Unit edge direction.
+    pub ev: DVec3,
+    /// Unit fan normal at the edge (IMPL-CHOICE I5 reference plane).
+    pub nv: DVec3,
+}
+
 /// Steps between two `ctx.checkpoint()` polls.
 const CHECK_EVERY: u64 = 4096;
 
@@ -29,11 +48,18 @@ impl Mesher<'_> {
     fn shape_ok(&self, x: DVec3, y: DVec3, z: DVec3, apex: bool) -> Option<DVec3> {
         let c = self.cfg.cos_alpha;
         // angle > alpha_max  <=>  cos < cos(alpha_max); strict as the paper (§2).
+        let c2 = c * c;
         let ang_bad = |u: DVec3, v: DVec3| {
             let d = u.dot(v);
-            // cos(angle) < c  <=>  d < c |u||v|; squared compare when signs agree.
-            let m = c * (u.length_squared() * v.length_squared()).sqrt();
-            d < m
+            // cos(angle) < c  <=>  d < c |u||v|, decided on squares (no square root):
+            // for c < 0 it needs d < 0 and d^2 > c^2 |u|^2 |v|^2; for c >= 0 it holds
+            // when d < 0 or d^2 < c^2 |u|^2 |v|^2.
+            let m2 = c2 * u.length_squared() * v.length_squared();
+            if c < 0.0 {
+                d < 0.0 && d * d > m2
+            } else {
+                d < 0.0 || d * d < m2
+            }
         };
         if ang_bad(y - x, z - x) || ang_bad(x - z, y - z) {
             return None;
@@ -126,16 +152,34 @@ impl Mesher<'_> {
     /// Steps 2-3 for candidate `t`: the rules and the score. Returns the score and the
     /// unit normal of `(a, t, b)`, or `None` when a rule removes `t`.
     #[inline]
-    fn evaluate(&self, a: u32, b: u32, t: u32, o: DVec3, n_old: DVec3) -> Option<(f64, DVec3)> {
-        let (pa, pb, pt) = (
-            self.pts[a as usize],
-            self.pts[b as usize],
-            self.pts[t as usize],
-        );
+    fn evaluate(&self, x: &EdgeCtx, t: u32) -> Option<(f64, DVec3)> {
+        let EdgeCtx {
+            a,
+            b,
+            pa,
+            pb,
+            o,
+            n_old,
+            ev,
+            nv,
+        } = *x;
+        let pt = self.pts[t as usize];
         // ASSUMPTION A13: an existing edge {a,t} / {t,b} is allowed only when the
         // operation consumes it as the front edge t->a / b->t.
         let mut fill = false;
-        if self.state[t as usize] != FREE {
+        if self.state[t as usize] == FREE {
+            // IMPL-CHOICE I5: a Free point may not rise more than the elevation bound
+            // above the mesh's tangent plane at o (normal: fan normals of a and b).
+            if self.cfg.sin_elev < 1.0 || self.cfg.height_r < 1.0 {
+                let v = pt - o;
+                let h = v.dot(nv).abs();
+                // Squared compare of h > sin_elev |v| first (no square root).
+                let se = self.cfg.sin_elev;
+                if h > self.cfg.height_r * self.cfg.r || h * h > se * se * v.length_squared() {
+                    return None;
+                }
+            }
+        } else {
             let ta = self.e_a[self.fin[a as usize] as usize] == t;
             let bt = self.e_b[self.fout[b as usize] as usize] == t;
             if (!ta && self.adj.has(a, t)) || (!bt && self.adj.has(b, t)) {
@@ -165,7 +209,6 @@ impl Mesher<'_> {
         }
         let r = self.cfg.r;
         let v = pt - o;
-        let ev = (pb - pa).normalize();
         let vl = v.length();
         let v_perp = v - v.dot(ev) * ev;
         let cos_g = if vl > 0.0 { v_perp.length() / vl } else { 0.0 };
@@ -205,46 +248,115 @@ impl Mesher<'_> {
         let (pa, pb) = (self.pts[a as usize], self.pts[b as usize]);
         let o = (pa + pb) * 0.5;
         let n_old = self.e_nrm[e as usize];
+        let nv = self.vn[a as usize] + self.vn[b as usize];
+        let x = EdgeCtx {
+            a,
+            b,
+            pa,
+            pb,
+            o,
+            n_old,
+            ev: (pb - pa).normalize(),
+            nv: if nv.length_squared() > 1e-24 {
+                nv.normalize()
+            } else {
+                n_old
+            },
+        };
         self.gather(e, a, b, o);
         if self.revisiting {
             self.add_front_neighbours(a, b);
         }
-        // Step 2-3 over front candidates (already in `cand`) and Free points.
-        let mut k = 0;
-        while k < self.cand.len() {
-            let t = self.cand[k].t;
-            if let Some((s, n)) = self.evaluate(a, b, t, o, n_old) {
-                self.cand[k].score = s;
-                self.cand[k].n_new = n;
-                k += 1;
-            } else {
-                self.cand.swap_remove(k);
-            }
+        // Steps 2-4, lazily. Every candidate's score is bounded above by
+        // U(t) = w1 + w2 + w3 (R - d(t))/R (cos beta, cos gamma <= 1), known from its
+        // distance alone. Candidates are evaluated in decreasing U; the best evaluated
+        // one is validated as soon as its exact score is strictly above the U of every
+        // unevaluated candidate. The validation order is therefore exactly that of the
+        // full evaluation (decreasing score, ties by lower index), but most candidates
+        // of an edge are never evaluated, because the first validated one usually wins.
+        let mut pend = std::mem::take(&mut self.pend);
+        pend.clear();
+        for c in &self.cand {
+            pend.push((self.score_bound(&x, c.t), c.t));
         }
-        for k in 0..self.free_near.len() {
-            let t = self.free_near[k];
-            if let Some((score, n_new)) = self.evaluate(a, b, t, o, n_old) {
-                self.cand.push(Cand { t, score, n_new });
-            }
+        for &t in &self.free_near {
+            pend.push((self.score_bound(&x, t), t));
         }
-        if self.cand.is_empty() {
-            self.stats.fail_rules += 1;
-        }
-        // Step 4: pop candidates by decreasing score (ties: lower index) and validate.
-        while !self.cand.is_empty() {
-            let mut best = 0;
-            for k in 1..self.cand.len() {
-                let (c, bc) = (&self.cand[k], &self.cand[best]);
-                if c.score > bc.score || (c.score == bc.score && c.t < bc.t) {
-                    best = k;
+        self.cand.clear();
+        let mut passed = 0usize;
+        let mut result = None;
+        let mut best_score = f64::NEG_INFINITY;
+        loop {
+            // Evaluate (largest bound first; a linear scan, as only a few are taken)
+            // until the best evaluated score beats every pending bound.
+            while !pend.is_empty() {
+                let mut m = 0;
+                for k in 1..pend.len() {
+                    if pend[k].0 > pend[m].0 {
+                        m = k;
+                    }
+                }
+                if best_score > pend[m].0 {
+                    break;
+                }
+                let t = pend.swap_remove(m).1;
+                if let Some((score, n_new)) = self.evaluate(&x, t) {
+                    passed += 1;
+                    best_score = best_score.max(score);
+                    self.cand.push(Cand { t, score, n_new });
                 }
             }
+            let Some(best) = self.best_cand() else {
+                break;
+            };
             let c = self.cand.swap_remove(best);
             if let Some(op) = self.validate(e, a, b, o, n_old, c) {
-                return Some(op);
+                result = Some(op);
+                break;
+            }
+            best_score = self
+                .best_cand()
+                .map_or(f64::NEG_INFINITY, |k| self.cand[k].score);
+        }
+        if passed == 0 {
+            self.stats.fail_rules += 1;
+        }
+        self.pend = pend;
+        result
+    }
+
+    /// Index in `cand` of the best candidate: highest score, ties by lower point index.
+    #[inline]
+    fn best_cand(&self) -> Option<usize> {
+        if self.cand.is_empty() {
+            return None;
+        }
+        let mut best = 0;
+        for k in 1..self.cand.len() {
+            let (c, bc) = (&self.cand[k], &self.cand[best]);
+            if c.score > bc.score || (c.score == bc.score && c.t < bc.t) {
+                best = k;
             }
         }
-        None
+        Some(best)
+    }
+
+    /// Upper bound of the score C(t) of Eq. 8 from the distance term alone (cos beta and
+    /// cos gamma are at most 1), with a relative slack against rounding.
+    #[inline]
+    fn score_bound(&self, x: &EdgeCtx, t: u32) -> f64 {
+        let pt = self.pts[t as usize];
+        let r = self.cfg.r;
+        let d = if self.cfg.seg_dist {
+            let (pa, pb) = (x.pa, x.pb);
+            let s = (pt - pa).dot(pb - pa) / (pb - pa).length_squared();
+            (pt - (pa + (pb - pa) * s.clamp(0.0, 1.0))).length()
+        } else {
+            (pt - x.o).length()
+        };
+        let w = self.cfg.w;
+        let u = w[0] + w[1] + w[2] * ((r - d) / r).max(0.0);
+        u + 1e-9 * (w[0] + w[1] + w[2])
     }
 
     /// Crossing test and classification of candidate `c` (§4.4 Step 4, §4.5).
@@ -256,7 +368,21 @@ impl Mesher<'_> {
             self.stats.sector_rejects += 1;
             return None;
         }
-        if crosses(self.pts, &self.xs, np, o, self.cfg.r, &[(a, t), (t, b)]) {
+        // The nearby front edges are projected once for both tests.
+        let (u, v) = plane_basis(np);
+        project(self.pts, &self.xs, u, v, np, o, self.cfg.r, &mut self.xp);
+        let pr = |i: u32| {
+            let q = self.pts[i as usize] - o;
+            [q.dot(u), q.dot(v)]
+        };
+        let (qa, qt, qb) = (pr(a), pr(t), pr(b));
+        if crosses_projected(&self.xp, &[(a, qa, t, qt), (t, qt, b, qb)]) {
+            self.stats.cross_rejects += 1;
+            return None;
+        }
+        // IMPL-CHOICE I6: no front vertex may lie inside the new triangle (a fold).
+        if self.cfg.front_inside_check && front_inside_projected(&self.xp, [a, t, b], [qa, qt, qb])
+        {
             self.stats.cross_rejects += 1;
             return None;
         }
@@ -436,16 +562,36 @@ impl Mesher<'_> {
     }
 }
 
-/// Clockwise angle in [0, 2 pi) from 2-D direction `s` to `d`.
+/// Clockwise angle from 2-D direction `s` to `d`, as a *pseudo-angle* in [0, 4): a
+/// strictly increasing function of the true clockwise angle in [0, 2 pi) with 0 <-> 0
+/// ("diamond angle", no trigonometry). Callers only compare such values, so the sector
+/// tests decide exactly as with `atan2`.
 #[inline]
 fn cw_angle(s: [f64; 2], d: [f64; 2]) -> f64 {
+    // Counter-clockwise angle of d relative to s: the direction (dt, cr).
     let cr = s[0] * d[1] - s[1] * d[0];
     let dt = s[0] * d[0] + s[1] * d[1];
-    let th = cr.atan2(dt);
-    if th <= 0.0 {
-        -th
+    let p = diamond(dt, cr);
+    if p == 0.0 { 0.0 } else { 4.0 - p }
+}
+
+/// Pseudo-angle of the direction `(x, y)` in [0, 4), increasing with `atan2(y, x)` taken
+/// in [0, 2 pi); 0 for the zero vector (as `atan2(0, 0) = 0`).
+#[inline]
+fn diamond(x: f64, y: f64) -> f64 {
+    if x == 0.0 && y == 0.0 {
+        return 0.0;
+    }
+    if y >= 0.0 {
+        if x >= 0.0 {
+            y / (x + y)
+        } else {
+            1.0 + (-x) / (y - x)
+        }
+    } else if x < 0.0 {
+        2.0 + (-y) / (-x - y)
     } else {
-        std::f64::consts::TAU - th
+        3.0 + x / (x - y)
     }
 }
 
@@ -457,5 +603,41 @@ pub(crate) fn plane_normal(n1: DVec3, n2: DVec3) -> DVec3 {
         s.normalize()
     } else {
         n1
+    }
+}
+
+#[cfg(test)]
+mod angle_tests {
+    use super::*;
+
+    /// The pseudo-angle orders directions exactly as the clockwise `atan2` angle.
+    #[test]
+    fn pseudo_angle_is_monotone_in_the_true_angle() {
+        let true_cw = |s: [f64; 2], d: [f64; 2]| {
+            let th = (s[0] * d[1] - s[1] * d[0]).atan2(s[0] * d[0] + s[1] * d[1]);
+            if th <= 0.0 {
+                -th
+            } else {
+                std::f64::consts::TAU - th
+            }
+        };
+        let s = [0.6, -0.8];
+        let dirs: Vec<[f64; 2]> = (0..720)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 720.0 + 0.001;
+                [a.cos() * 2.0, a.sin() * 2.0]
+            })
+            .collect();
+        for x in &dirs {
+            for y in &dirs {
+                let (tx, ty) = (true_cw(s, *x), true_cw(s, *y));
+                let (px, py) = (cw_angle(s, *x), cw_angle(s, *y));
+                if (tx - ty).abs() > 1e-9 {
+                    assert_eq!(tx < ty, px < py, "{x:?} {y:?}");
+                }
+            }
+        }
+        assert_eq!(cw_angle(s, s), 0.0);
+        assert_eq!(cw_angle(s, [0.0, 0.0]), 0.0);
     }
 }
