@@ -16,7 +16,11 @@ fn main() {
         scan: None,
     };
     let count: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(3);
-    let pts = reconbench_synth::generate(&spec, 1)
+    let seed: u64 = std::env::var("SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let pts = reconbench_synth::generate(&spec, seed)
         .expect("data")
         .positions;
     let st = run_ufm(&pts, &UfmParams::default(), &mut RunCtx::new(1)).expect("ufm");
