@@ -54,6 +54,8 @@ fn main() {
         println!("phase {name:16} {s:.3} s");
     }
     let rep = analyze(&r.mesh);
+    let sizes: Vec<usize> = rep.component_details.iter().map(|c| c.faces).collect();
+    println!("component faces {sizes:?}");
     println!(
         "points {} faces {} watertight {} genus {:?} (expected {:?}) components {} total {total:.3} s",
         cloud.len(),
