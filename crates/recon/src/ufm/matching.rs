@@ -185,6 +185,49 @@ mod tests {
         }
     }
 
+    /// Fig. 4.1 worked example: U_v1 = {f1..f6}, U_v2 = {f6..f9}, U_v3 = {f5, f6, f9,
+    /// f10, f11} give M_f6 = 3, M_f5 = M_f9 = 2, all others 1; U(f̄)_v1 = {f6} and
+    /// DT(U)_v1 = {f1..f7} (f7 contains v1 and v2 and lies only in U_v2).
+    #[test]
+    fn fig_4_1_worked_example() {
+        // Vertices v1 = 1, v2 = 2, v3 = 3; others >= 10. f[i] = facet f_{i+1}.
+        let f: [[u32; 3]; 11] = [
+            [1, 10, 11],
+            [1, 11, 12],
+            [1, 12, 13],
+            [1, 13, 14],
+            [1, 3, 14],
+            [1, 2, 3],
+            [1, 2, 15],
+            [2, 15, 16],
+            [2, 3, 16],
+            [3, 16, 17],
+            [3, 14, 17],
+        ];
+        let umbrella = |w: u32| -> &'static [usize] {
+            match w {
+                1 => &[0, 1, 2, 3, 4, 5],
+                2 => &[5, 6, 7, 8],
+                3 => &[4, 5, 8, 9, 10],
+                _ => &[],
+            }
+        };
+        let m: Vec<u8> = (0..11)
+            .map(|i| absolute_index(f[i].map(|w| umbrella(w).contains(&i))))
+            .collect();
+        assert_eq!(m, vec![1, 1, 1, 1, 2, 3, 1, 1, 2, 1, 1]);
+        let ubar: Vec<usize> = umbrella(1).iter().copied().filter(|&i| m[i] == 3).collect();
+        assert_eq!(ubar, vec![5]);
+        let dt_u: Vec<usize> = (0..11)
+            .filter(|&i| f[i].contains(&1) && m[i] >= 1)
+            .collect();
+        assert_eq!(dt_u, (0..7).collect::<Vec<_>>());
+        // v1 sees f7 as (1,0), f5 as (2,1), f6 as (3).
+        assert_eq!(relative_label(m[6], umbrella(1).contains(&6)), "(1,0)");
+        assert_eq!(relative_label(m[4], true), "(2,1)");
+        assert_eq!(relative_label(m[5], true), "(3)");
+    }
+
     #[test]
     fn umbrella_states() {
         assert_eq!(
