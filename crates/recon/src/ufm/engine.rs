@@ -14,7 +14,7 @@ use reconbench_geom::method::{MethodError, RunCtx};
 
 use super::matching::{StopHistory, StopRule, absolute_index, class};
 use super::params::{Init, SizeOrder, UfmParams, Update};
-use super::umbrella::{BuildFail, LinkGraph};
+use super::umbrella::LinkGraph;
 
 /// The Delaunay complex with the per-triangle attributes UFM needs (computed once).
 #[derive(Debug)]
@@ -193,6 +193,7 @@ pub struct Scratch {
     pub g: LinkGraph,
     keys: Vec<u64>,
     order: Vec<u32>,
+    sub: Vec<u32>,
 }
 
 /// Which queue a rebuild uses.
@@ -233,34 +234,52 @@ fn rebuild_vertex(
     let row = cx.row(v);
     let base = cx.off[v] as usize;
     let n = row.len();
-    cx.prepare(v, &mut s.g);
     match *mode {
         Mode::Init { start } => {
-            // Step 2.2: key (-diam, id), largest first.
+            // Step 2.1 / 2.3: start from GT_v. The link graph is built over GT_v only
+            // (the same graph as DT_v restricted to C, without the isolated rest).
+            if start == Init::Gabriel {
+                s.sub.clear();
+                s.sub
+                    .extend((0..n as u32).filter(|&i| cx.gabriel[row[i as usize] as usize]));
+                let facets = cx.facets();
+                let sub = std::mem::take(&mut s.sub);
+                s.g.prepare(
+                    v as u32,
+                    sub.iter().map(|&i| facets[row[i as usize] as usize].v),
+                );
+                // Step 2.2: key (-diam, id), largest first.
+                sort_order(s, sub.len(), |j| {
+                    (cx.rank_init[row[sub[j] as usize] as usize] as u64) << 29
+                });
+                let order = std::mem::take(&mut s.order);
+                let res = s.g.build(|_| true, &order, None);
+                s.order = order;
+                if let Ok(i) = res {
+                    c.dropped_cycles += i.dropped_cycles as u64;
+                    out.fill(false);
+                    for (j, &i) in sub.iter().enumerate() {
+                        out[i as usize] = s.g.alive[j];
+                    }
+                    s.sub = sub;
+                    return c;
+                }
+                s.sub = sub;
+                // Step 2.4: fall back to all Delaunay triangles.
+                c.init_fallbacks += 1;
+            }
+            cx.prepare(v, &mut s.g);
             sort_order(s, n, |i| (cx.rank_init[row[i] as usize] as u64) << 29);
             let order = std::mem::take(&mut s.order);
-            // Step 2.1 / 2.3: start from GT_v.
-            let mut res = match start {
-                Init::Gabriel => {
-                    s.g.build(|i| cx.gabriel[row[i] as usize], &order, None)
-                        .map(|_| ())
-                }
-                Init::Delaunay => Err(BuildFail::NoCycle),
-            };
-            if res.is_err() {
-                // Step 2.4: fall back to all Delaunay triangles.
-                if start == Init::Gabriel {
-                    c.init_fallbacks += 1;
-                }
-                res = s.g.build(|_| true, &order, None).map(|i| {
-                    c.dropped_cycles += i.dropped_cycles as u64;
-                });
-            }
+            let res = s.g.build(|_| true, &order, None);
             s.order = order;
-            if res.is_err() {
-                c.build_failures += 1;
-                out.fill(false);
-                return c;
+            match res {
+                Ok(i) => c.dropped_cycles += i.dropped_cycles as u64,
+                Err(_) => {
+                    c.build_failures += 1;
+                    out.fill(false);
+                    return c;
+                }
             }
         }
         Mode::Update {
@@ -269,6 +288,7 @@ fn rebuild_vertex(
             lock,
             ignore_member,
         } => {
+            cx.prepare(v, &mut s.g);
             // Line 9: key_v(t) = (class_v(t), size rank, id).
             sort_order(s, n, |i| {
                 let f = row[i] as usize;
