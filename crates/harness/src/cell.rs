@@ -349,6 +349,16 @@ pub(crate) fn diagnostics_json(d: &Diagnostics) -> BTreeMap<String, Value> {
         .collect()
 }
 
+/// Numeric method diagnostics that are copied into the metrics of a reconstruction
+/// row (deterministic counts, so `[[expect]]` entries and tables can use them): UFM's
+/// matching percentage, iteration count, unmatched and pinched points.
+pub const DIAGNOSTIC_METRICS: &[&str] = &[
+    "matching",
+    "iterations",
+    "unmatched_points",
+    "pinched_vertices",
+];
+
 /// Keeps deterministic numeric entries (timings of the evaluation itself are cost, not
 /// metrics, and are left out so that rows compare byte for byte).
 fn keep_metrics(row: BTreeMap<String, f64>) -> BTreeMap<String, f64> {
@@ -462,6 +472,13 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             let re = reconbench_metrics::eval_refused(&r.refused, &data.is_outlier)
                 .map_err(|e| format!("metrics: {e}"))?;
             out.metrics.extend(keep_metrics(re.to_row()));
+            for k in DIAGNOSTIC_METRICS {
+                if let Some(reconbench_geom::method::Diagnostic::Number(x)) = r.diagnostics.get(*k)
+                    && x.is_finite()
+                {
+                    out.metrics.insert((*k).to_string(), *x);
+                }
+            }
             let verr: Vec<f64> = match &ev.distance.vertex_error {
                 Some(v) if v.len() == r.mesh.n_vertices() => v.iter().map(|x| x / diag).collect(),
                 _ => r

@@ -2,6 +2,9 @@
 //!
 //! * [`priority_front`] — `priority-front`, the priority-driven advancing front of Li,
 //!   Han & Wee (CAD 2009), spec 001.
+//! * [`ufm`] — `ufm`, Umbrella Facet Matching (Ma 2011, ch. 3, spec 000 §1.1): a
+//!   watertight manifold Delaunay reconstruction, and `ufm-mesh`, its local-mesh
+//!   normal estimator (ch. 4, Algorithm B).
 //!
 //! Every method implements [`reconbench_geom::method::Reconstructor`] and has a serde
 //! `Params` struct with documented defaults. [`samples`] holds small point-set
@@ -9,5 +12,7 @@
 
 pub mod priority_front;
 pub mod samples;
+pub mod ufm;
 
 pub use priority_front::{PriorityFront, PriorityFrontParams};
+pub use ufm::{Ufm, UfmMesh, UfmMeshParams, UfmParams};

@@ -10,7 +10,9 @@ use reconbench_normals::{
     Jet, JetParams, LvmApprox, LvmApproxParams, PlaneFit, PlaneFitParams, WeightedPlaneFit,
     WeightedPlaneFitParams,
 };
-use reconbench_recon::{PriorityFront, PriorityFrontParams};
+use reconbench_recon::{
+    PriorityFront, PriorityFrontParams, Ufm, UfmMesh, UfmMeshParams, UfmParams,
+};
 
 use crate::registry::{MethodEntry, ParamDoc, features, normals, reconstruct};
 
@@ -283,6 +285,13 @@ pub fn entries() -> Vec<MethodEntry> {
             LVM_DOCS,
             |p, _| Ok(Box::new(LvmApprox { params: p })),
         ),
+        normals::<UfmMeshParams>(
+            "ufm-mesh",
+            "seed 000 §1.2.3",
+            "local-mesh matching normals (Ma 2011 ch. 4, Algorithm B) on the UFM state",
+            docs_from_tuples(reconbench_recon::ufm::normals::PARAM_DOCS),
+            |p, _| Ok(Box::new(UfmMesh::new(p)?)),
+        ),
         features::<GaussMapParams>(
             "gauss-map",
             "seed 002 §3",
@@ -310,6 +319,13 @@ pub fn entries() -> Vec<MethodEntry> {
             "priority-driven advancing front (Li, Han & Wee); deviations in docs/methods/priority_front.md",
             docs_from_tuples(reconbench_recon::priority_front::PARAM_DOCS),
             |p, _| Ok(Box::new(PriorityFront::new(p)?)),
+        ),
+        reconstruct::<UfmParams>(
+            "ufm",
+            "seed 000 §1.1",
+            "Umbrella Facet Matching on the 3D Delaunay triangulation (Ma 2011 ch. 3)",
+            docs_from_tuples(reconbench_recon::ufm::PARAM_DOCS),
+            |p, _| Ok(Box::new(Ufm::new(p)?)),
         ),
     ]
 }

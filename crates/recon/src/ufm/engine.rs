@@ -1,0 +1,571 @@
+//! The UFM loop (spec 000 §1.1.4–1.1.5): per-triangle attributes, initial umbrellas,
+//! synchronous (or Gauss–Seidel) updates by facet matching, stop rules.
+//!
+//! State layout: the Delaunay triangles around every vertex are kept as one CSR array
+//! (`off`, `items`, items increasing per vertex); umbrella membership is one `bool` per
+//! CSR slot (`inu`), so each vertex writes only its own slot range and the parallel
+//! update is deterministic. `slot[f]` gives the three slots of facet `f` (in the order
+//! of its sorted vertex triple), so `M_f` is the sum of three flags.
+
+use glam::DVec3;
+use rayon::prelude::*;
+use reconbench_delaunay::{Delaunay, Facet};
+use reconbench_geom::method::{MethodError, RunCtx};
+
+use super::matching::{StopHistory, StopRule, absolute_index, class};
+use super::params::{Init, SizeOrder, UfmParams, Update};
+use super::umbrella::LinkGraph;
+
+/// The Delaunay complex with the per-triangle attributes UFM needs (computed once).
+#[derive(Debug)]
+pub struct Complex {
+    /// The triangulation (vertices = deduplicated input points).
+    pub dt: Delaunay,
+    /// CSR offsets of `DT_v` (one row per vertex).
+    pub off: Vec<u32>,
+    /// CSR items: facet ids, increasing per row.
+    pub items: Vec<u32>,
+    /// Per facet: the CSR slots of its three vertices (order of `Facet::v`).
+    pub slot: Vec<[u32; 3]>,
+    /// Per facet: rank by (diam descending, id) — the initial queue (Step 2.2, A-02).
+    pub rank_init: Vec<u32>,
+    /// Per facet: rank used inside a class during the update.
+    pub rank_update: Vec<u32>,
+    /// Per facet: the exact Gabriel flag.
+    pub gabriel: Vec<bool>,
+}
+
+impl Complex {
+    /// Triangles incident to `v` (facet ids).
+    pub fn row(&self, v: usize) -> &[u32] {
+        &self.items[self.off[v] as usize..self.off[v + 1] as usize]
+    }
+
+    /// Facets of the triangulation.
+    pub fn facets(&self) -> &[Facet] {
+        self.dt.facets()
+    }
+
+    /// Number of vertices.
+    pub fn n_vertices(&self) -> usize {
+        self.off.len() - 1
+    }
+
+    /// Prepares the link graph of `v` over `DT_v`.
+    pub fn prepare(&self, v: usize, g: &mut LinkGraph) {
+        let facets = self.facets();
+        g.prepare(
+            v as u32,
+            self.row(v).iter().map(move |&f| facets[f as usize].v),
+        );
+    }
+}
+
+/// `diam(t) = 2R` of every facet (+∞ for a degenerate one), in parallel.
+fn diameters(dt: &Delaunay) -> Vec<f64> {
+    let pts = dt.vertices();
+    dt.facets()
+        .par_iter()
+        .map(|f| {
+            let [a, b, c] = f.v.map(|x| pts[x as usize]);
+            circum_diameter(a, b, c)
+        })
+        .collect()
+}
+
+/// Diameter of the circumcircle of triangle `abc`: `|ab||bc||ca| / (2 Area)`;
+/// `+∞` when the area is (numerically) zero.
+pub fn circum_diameter(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let cross = (b - a).cross(c - a).length();
+    let prod = (b - a).length() * (c - b).length() * (a - c).length();
+    if cross <= 0.0 || !cross.is_finite() {
+        return f64::INFINITY;
+    }
+    let d = prod / cross;
+    if d.is_finite() { d } else { f64::INFINITY }
+}
+
+/// Rank of every facet under (diameter in the given direction, then id).
+fn ranks(diam: &[f64], large_first: bool) -> Vec<u32> {
+    let mut ids: Vec<u32> = (0..diam.len() as u32).collect();
+    ids.par_sort_unstable_by(|&x, &y| {
+        let (dx, dy) = (diam[x as usize], diam[y as usize]);
+        let o = if large_first {
+            dy.total_cmp(&dx)
+        } else {
+            dx.total_cmp(&dy)
+        };
+        o.then(x.cmp(&y))
+    });
+    let mut rank = vec![0u32; diam.len()];
+    for (r, &f) in ids.iter().enumerate() {
+        rank[f as usize] = r as u32;
+    }
+    rank
+}
+
+impl Complex {
+    /// Step 1 after the triangulation: CSR of `DT_v`, slots, diameters, ranks, Gabriel
+    /// flags (all in parallel where it pays).
+    pub fn new(dt: Delaunay, size_order: SizeOrder) -> Result<Self, MethodError> {
+        let nv = dt.n_vertices();
+        let facets = dt.facets();
+        if facets.len() >= u32::MAX as usize / 2 {
+            return Err(MethodError::InvalidInput(format!(
+                "{} Delaunay triangles exceed the supported range",
+                facets.len()
+            )));
+        }
+        let mut off = Vec::with_capacity(nv + 1);
+        off.push(0u32);
+        for v in 0..nv {
+            let n = dt.facets_of_vertex(v as u32).len() as u32;
+            off.push(off[v] + n);
+        }
+        let mut items = Vec::with_capacity(off[nv] as usize);
+        for v in 0..nv {
+            items.extend_from_slice(dt.facets_of_vertex(v as u32));
+        }
+        let mut slot = vec![[0u32; 3]; facets.len()];
+        for v in 0..nv {
+            for s in off[v]..off[v + 1] {
+                let f = items[s as usize] as usize;
+                let k = facets[f]
+                    .v
+                    .iter()
+                    .position(|&x| x as usize == v)
+                    .expect("facet contains its vertex");
+                slot[f][k] = s;
+            }
+        }
+        let diam = diameters(&dt);
+        let rank_init = ranks(&diam, true);
+        let rank_update = match size_order {
+            SizeOrder::LargeFirst => rank_init.clone(),
+            SizeOrder::SmallFirst => ranks(&diam, false),
+        };
+        let gabriel = dt.gabriel_flags();
+        Ok(Self {
+            dt,
+            off,
+            items,
+            slot,
+            rank_init,
+            rank_update,
+            gabriel,
+        })
+    }
+}
+
+/// Counters of one run (summed over vertices and iterations).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Vertices whose Gabriel cluster held no umbrella (Step 2.4 fallback to `DT_v`).
+    pub init_fallbacks: u64,
+    /// Rebuilds repeated without locks because the locked result was invalid.
+    pub lock_fallbacks: u64,
+    /// Pocket removals skipped because their cascade would orphan a locked facet.
+    pub skipped_cascades: u64,
+    /// Disjoint cycles dropped by the A-05 rule.
+    pub dropped_cycles: u64,
+    /// Builds that failed even on all of `DT_v` without locks (expected 0; the vertex
+    /// keeps its previous umbrella).
+    pub build_failures: u64,
+}
+
+impl std::ops::Add for Counters {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self {
+            init_fallbacks: self.init_fallbacks + o.init_fallbacks,
+            lock_fallbacks: self.lock_fallbacks + o.lock_fallbacks,
+            skipped_cascades: self.skipped_cascades + o.skipped_cascades,
+            dropped_cycles: self.dropped_cycles + o.dropped_cycles,
+            build_failures: self.build_failures + o.build_failures,
+        }
+    }
+}
+
+/// Per-thread scratch of a vertex rebuild.
+#[derive(Debug, Default, Clone)]
+pub struct Scratch {
+    /// The link graph.
+    pub g: LinkGraph,
+    keys: Vec<u64>,
+    order: Vec<u32>,
+    sub: Vec<u32>,
+}
+
+/// Which queue a rebuild uses.
+enum Mode<'a> {
+    /// Step 2: initial umbrella.
+    Init { start: Init },
+    /// Step 3: update from the current state.
+    Update {
+        m: &'a [u8],
+        inu: &'a [bool],
+        lock: bool,
+        /// Stagnation escape (non-faithful extension): ignore the membership bit, so
+        /// the middle level collapses and ties of `M_f` go to the global size order.
+        ignore_member: bool,
+    },
+}
+
+/// Sorts the local facets of `DT_v` by `key(i)` into `s.order`.
+fn sort_order(s: &mut Scratch, n: usize, key: impl Fn(usize) -> u64) {
+    s.keys.clear();
+    // key: class (3 bits) << 61 | rank (32 bits) << 29 | local index (29 bits).
+    s.keys.extend((0..n).map(|i| key(i) | i as u64));
+    s.keys.sort_unstable();
+    s.order.clear();
+    s.order
+        .extend(s.keys.iter().map(|&k| (k & ((1u64 << 29) - 1)) as u32));
+}
+
+/// Rebuilds the umbrella of `v` into `out` (one flag per local facet of `DT_v`).
+fn rebuild_vertex(
+    cx: &Complex,
+    v: usize,
+    s: &mut Scratch,
+    mode: &Mode,
+    out: &mut [bool],
+) -> Counters {
+    let mut c = Counters::default();
+    let row = cx.row(v);
+    let base = cx.off[v] as usize;
+    let n = row.len();
+    match *mode {
+        Mode::Init { start } => {
+            // Step 2.1 / 2.3: start from GT_v. The link graph is built over GT_v only
+            // (the same graph as DT_v restricted to C, without the isolated rest).
+            if start == Init::Gabriel {
+                s.sub.clear();
+                s.sub
+                    .extend((0..n as u32).filter(|&i| cx.gabriel[row[i as usize] as usize]));
+                let facets = cx.facets();
+                let sub = std::mem::take(&mut s.sub);
+                s.g.prepare(
+                    v as u32,
+                    sub.iter().map(|&i| facets[row[i as usize] as usize].v),
+                );
+                // Step 2.2: key (-diam, id), largest first.
+                sort_order(s, sub.len(), |j| {
+                    (cx.rank_init[row[sub[j] as usize] as usize] as u64) << 29
+                });
+                let order = std::mem::take(&mut s.order);
+                let res = s.g.build(|_| true, &order, None);
+                s.order = order;
+                if let Ok(i) = res {
+                    c.dropped_cycles += i.dropped_cycles as u64;
+                    out.fill(false);
+                    for (j, &i) in sub.iter().enumerate() {
+                        out[i as usize] = s.g.alive[j];
+                    }
+                    s.sub = sub;
+                    return c;
+                }
+                s.sub = sub;
+                // Step 2.4: fall back to all Delaunay triangles.
+                c.init_fallbacks += 1;
+            }
+            cx.prepare(v, &mut s.g);
+            sort_order(s, n, |i| (cx.rank_init[row[i] as usize] as u64) << 29);
+            let order = std::mem::take(&mut s.order);
+            let res = s.g.build(|_| true, &order, None);
+            s.order = order;
+            match res {
+                Ok(i) => c.dropped_cycles += i.dropped_cycles as u64,
+                Err(_) => {
+                    c.build_failures += 1;
+                    out.fill(false);
+                    return c;
+                }
+            }
+        }
+        Mode::Update {
+            m,
+            inu,
+            lock,
+            ignore_member,
+        } => {
+            cx.prepare(v, &mut s.g);
+            // Line 9: key_v(t) = (class_v(t), size rank, id).
+            sort_order(s, n, |i| {
+                let f = row[i] as usize;
+                let cl = class(m[f], ignore_member || inu[base + i]) as u64;
+                (cl << 61) | ((cx.rank_update[f] as u64) << 29)
+            });
+            let order = std::mem::take(&mut s.order);
+            // Line 10 (ASSUMPTION A-09): lock the (3) facets.
+            let any_locked = lock && row.iter().any(|&f| m[f as usize] == 3);
+            let locked = |i: usize| m[row[i] as usize] == 3;
+            let mut res = if any_locked {
+                s.g.build(|_| true, &order, Some(&locked))
+            } else {
+                s.g.build(|_| true, &order, None)
+            };
+            if res.is_err() && any_locked {
+                // Line 12: rebuild once without protection.
+                c.lock_fallbacks += 1;
+                res = s.g.build(|_| true, &order, None);
+            }
+            s.order = order;
+            match res {
+                Ok(i) => {
+                    c.dropped_cycles += i.dropped_cycles as u64;
+                    c.skipped_cascades += i.skipped_cascades as u64;
+                }
+                Err(_) => {
+                    c.build_failures += 1;
+                    out.copy_from_slice(&inu[base..base + n]);
+                    return c;
+                }
+            }
+        }
+    }
+    out.copy_from_slice(&s.g.alive[..n]);
+    c
+}
+
+/// `M_t` for every facet from the membership flags (Step 3.1).
+pub fn matching_indices(cx: &Complex, inu: &[bool], m: &mut Vec<u8>) {
+    m.clear();
+    m.par_extend(
+        cx.slot
+            .par_iter()
+            .map(|s| absolute_index(s.map(|x| inu[x as usize]))),
+    );
+}
+
+/// Whether the umbrella of `v` is fully matched (`G_v = 1`).
+pub fn fully_matched(cx: &Complex, inu: &[bool], m: &[u8], v: usize) -> bool {
+    let base = cx.off[v] as usize;
+    let mut any = false;
+    for (i, &f) in cx.row(v).iter().enumerate() {
+        if inu[base + i] {
+            any = true;
+            if m[f as usize] != 3 {
+                return false;
+            }
+        }
+    }
+    any
+}
+
+/// Grades `G_v` of all vertices.
+pub fn grades(cx: &Complex, inu: &[bool], m: &[u8]) -> Vec<bool> {
+    (0..cx.n_vertices())
+        .into_par_iter()
+        .map(|v| fully_matched(cx, inu, m, v))
+        .collect()
+}
+
+/// Vertex blocks with their disjoint slot ranges of `out`, for the parallel update.
+fn blocks<'a>(
+    cx: &Complex,
+    out: &'a mut [bool],
+    per: usize,
+) -> Vec<(usize, usize, &'a mut [bool])> {
+    let nv = cx.n_vertices();
+    let mut res = Vec::with_capacity(nv / per + 1);
+    let mut rest = out;
+    let mut v0 = 0;
+    while v0 < nv {
+        let v1 = (v0 + per).min(nv);
+        let len = (cx.off[v1] - cx.off[v0]) as usize;
+        let (a, b) = rest.split_at_mut(len);
+        res.push((v0, v1, a));
+        rest = b;
+        v0 = v1;
+    }
+    res
+}
+
+/// Runs `mode` for every vertex in parallel into `out` (deterministic: each vertex
+/// writes its own slots; counters are summed).
+fn rebuild_all(
+    cx: &Complex,
+    out: &mut [bool],
+    mode: &Mode,
+    skip: Option<&(dyn Fn(usize) -> bool + Sync)>,
+    old: Option<&[bool]>,
+) -> Counters {
+    let mode_ref = mode;
+    blocks(cx, out, 256)
+        .into_par_iter()
+        .map_init(Scratch::default, |s, (v0, v1, chunk)| {
+            let mut c = Counters::default();
+            let start = cx.off[v0] as usize;
+            for v in v0..v1 {
+                let a = cx.off[v] as usize - start;
+                let b = cx.off[v + 1] as usize - start;
+                if let (Some(sk), Some(old)) = (skip, old)
+                    && sk(v)
+                {
+                    chunk[a..b].copy_from_slice(&old[a + start..b + start]);
+                    continue;
+                }
+                c = c + rebuild_vertex(cx, v, s, mode_ref, &mut chunk[a..b]);
+            }
+            c
+        })
+        .reduce(Counters::default, |a, b| a + b)
+}
+
+/// Result of the UFM loop.
+#[derive(Debug)]
+pub struct UfmState {
+    /// The complex.
+    pub cx: Complex,
+    /// Membership flags of the final umbrellas (one per CSR slot).
+    pub inu: Vec<bool>,
+    /// Matching indices of the final umbrellas.
+    pub m: Vec<u8>,
+    /// Matching fraction after each iteration (0 = initial umbrellas).
+    pub trace: Vec<f64>,
+    /// Update iterations done.
+    pub iterations: usize,
+    /// The stop rule that fired.
+    pub stop: StopRule,
+    /// Counters.
+    pub counters: Counters,
+    /// Stagnation escapes used (non-faithful extension).
+    pub escapes: usize,
+    /// Seconds of Step 2 (initial umbrellas).
+    pub init_s: f64,
+    /// Seconds of Step 3 (iterations).
+    pub iterate_s: f64,
+}
+
+/// Fraction of fully matched umbrellas.
+fn matched_fraction(cx: &Complex, inu: &[bool], m: &[u8]) -> f64 {
+    let nv = cx.n_vertices();
+    let n = (0..nv)
+        .into_par_iter()
+        .filter(|&v| fully_matched(cx, inu, m, v))
+        .count();
+    n as f64 / nv.max(1) as f64
+}
+
+/// Steps 2–3: initial umbrellas, then updates until a stop rule fires.
+pub fn run(cx: Complex, p: &UfmParams, ctx: &RunCtx) -> Result<UfmState, MethodError> {
+    let t0 = std::time::Instant::now();
+    let nslots = cx.items.len();
+    let mut inu = vec![false; nslots];
+    let mut counters = rebuild_all(&cx, &mut inu, &Mode::Init { start: p.init }, None, None);
+    let init_s = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
+    let mut m = Vec::new();
+    let mut history = StopHistory::default();
+    let mut next = vec![false; nslots];
+    let mut it = 0usize;
+    let mut escapes = 0usize;
+    let stop = loop {
+        // Step 3.1 and the stop test (3.5, A-07).
+        matching_indices(&cx, &inu, &mut m);
+        let mu = matched_fraction(&cx, &inu, &m);
+        let mut escape = false;
+        if let Some(rule) = history.record(mu, &inu, it, p.patience, p.max_iter) {
+            // Non-faithful extension: on a fixed point or limit cycle, run one update
+            // with the membership level switched off instead of stopping.
+            if matches!(rule, StopRule::FixedPoint | StopRule::LimitCycle) && escapes < p.escapes {
+                escapes += 1;
+                escape = true;
+            } else {
+                break rule;
+            }
+        }
+        ctx.checkpoint()?;
+        ctx.progress(it as f64 / p.max_iter.max(1) as f64);
+        // Steps 3.2–3.4.
+        it += 1;
+        match p.update {
+            Update::Jacobi => {
+                let mode = Mode::Update {
+                    m: &m,
+                    inu: &inu,
+                    lock: p.lock_matched,
+                    ignore_member: escape,
+                };
+                let frozen = |v: usize| fully_matched(&cx, &inu, &m, v);
+                let skip: Option<&(dyn Fn(usize) -> bool + Sync)> =
+                    if p.freeze_full { Some(&frozen) } else { None };
+                counters = counters + rebuild_all(&cx, &mut next, &mode, skip, Some(&inu));
+                // Line 13: synchronous update.
+                std::mem::swap(&mut inu, &mut next);
+            }
+            Update::GaussSeidel => {
+                counters = counters + gauss_seidel_sweep(&cx, &mut inu, &mut m, p, escape);
+            }
+        }
+    };
+    let trace = history.trace.clone();
+    Ok(UfmState {
+        cx,
+        inu,
+        m,
+        trace,
+        iterations: it,
+        stop,
+        counters,
+        escapes,
+        init_s,
+        iterate_s: t1.elapsed().as_secs_f64(),
+    })
+}
+
+/// One sequential sweep: each vertex in index order is rebuilt from the current state
+/// and the matching indices of its triangles are updated at once.
+fn gauss_seidel_sweep(
+    cx: &Complex,
+    inu: &mut [bool],
+    m: &mut [u8],
+    p: &UfmParams,
+    ignore_member: bool,
+) -> Counters {
+    let mut s = Scratch::default();
+    let mut out = Vec::new();
+    let mut c = Counters::default();
+    for v in 0..cx.n_vertices() {
+        if p.freeze_full && fully_matched(cx, inu, m, v) {
+            continue;
+        }
+        let row = cx.row(v);
+        let base = cx.off[v] as usize;
+        out.clear();
+        out.resize(row.len(), false);
+        let mode = Mode::Update {
+            m,
+            inu,
+            lock: p.lock_matched,
+            ignore_member,
+        };
+        c = c + rebuild_vertex(cx, v, &mut s, &mode, &mut out);
+        for (i, &f) in row.iter().enumerate() {
+            let old = inu[base + i];
+            if old != out[i] {
+                inu[base + i] = out[i];
+                if out[i] {
+                    m[f as usize] += 1;
+                } else {
+                    m[f as usize] -= 1;
+                }
+            }
+        }
+    }
+    c
+}
+
+/// Rebuilds the umbrella of one vertex from a given state (for tests of ).
+pub fn rebuild_one(cx: &Complex, v: usize, inu: &[bool], m: &[u8], lock: bool) -> Vec<bool> {
+    let mut s = Scratch::default();
+    let mut out = vec![false; cx.row(v).len()];
+    let mode = Mode::Update {
+        m,
+        inu,
+        lock,
+        ignore_member: false,
+    };
+    rebuild_vertex(cx, v, &mut s, &mode, &mut out);
+    out
+}

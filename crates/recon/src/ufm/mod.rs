@@ -1,0 +1,254 @@
+//! `ufm`: Umbrella Facet Matching, the watertight Delaunay reconstruction of Ji Ma's
+//! thesis (2011), chapter 3 (spec `shared/spec/000_ma_thesis.md` §1.1).
+//!
+//! Every input point keeps a candidate umbrella (a closed fan of Delaunay triangles
+//! around it). A triangle is *matched* when the umbrellas of its three corners all
+//! contain it. Umbrellas start from the Gabriel triangles (size priority, large removed
+//! first) and are rebuilt synchronously from all Delaunay triangles at the point with a
+//! three-level priority (absolute matching index, relative matching index, size) until
+//! every umbrella is fully matched or a stop rule fires. The output — all matched
+//! facets — is always edge-manifold; at 100 % matching it is a closed 2-manifold whose
+//! vertices are exactly the input points.
+//!
+//! Files: [`params`], [`umbrella`] (BuildUmbrella on the link graph), [`matching`]
+//! (Table 3.1 classes, umbrella states, A-07 stop rules), [`engine`] (attributes,
+//! iterations), [`normals`] (`ufm-mesh`, Algorithm B of chapter 4).
+//! See `docs/methods/ufm.md`.
+
+pub mod engine;
+pub mod matching;
+pub mod normals;
+pub mod params;
+pub mod umbrella;
+
+use std::time::Instant;
+
+use glam::DVec3;
+use reconbench_delaunay::{Delaunay, DelaunayError};
+use reconbench_geom::method::{
+    Diagnostic, Diagnostics, MethodError, Reconstruction, Reconstructor, RunCtx,
+};
+use reconbench_geom::topology::{MeshTopology, analyze_with, orient_consistently};
+use reconbench_geom::{PointCloud, TriMesh};
+
+pub use engine::{Complex, Counters, UfmState};
+pub use matching::StopRule;
+pub use normals::{UfmMesh, UfmMeshParams};
+pub use params::{Init, OutputSet, PARAM_DOCS, SizeOrder, UfmParams, Update};
+
+/// Registry name.
+pub const NAME: &str = "ufm";
+
+/// The `ufm` reconstructor.
+#[derive(Debug, Clone, Default)]
+pub struct Ufm {
+    /// Parameters.
+    pub params: UfmParams,
+}
+
+impl Ufm {
+    /// A reconstructor with validated parameters.
+    pub fn new(params: UfmParams) -> Result<Self, MethodError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
+fn num(d: &mut Diagnostics, k: &str, v: f64) {
+    d.insert(k.to_string(), Diagnostic::Number(v));
+}
+
+/// Step 1: the Delaunay triangulation (ASSUMPTION A-01: exact duplicates merged by the
+/// triangulation) and the triangle attributes. Phases `delaunay` and `attributes`.
+pub fn build_complex(
+    points: &[DVec3],
+    params: &UfmParams,
+    ctx: &mut RunCtx,
+) -> Result<Complex, MethodError> {
+    let dt = ctx.phase("delaunay", || {
+        let dt = Delaunay::new(points).map_err(|e| match e {
+            DelaunayError::NonFinite { index } => {
+                MethodError::InvalidInput(format!("ufm: point {index} has a non-finite coordinate"))
+            }
+            e => MethodError::InvalidInput(format!("ufm: {e}")),
+        })?;
+        // Triangle extraction and DT_v belong to the thesis's "DT" time.
+        dt.facets();
+        dt.facets_of_vertex(0);
+        Ok::<_, MethodError>(dt)
+    })?;
+    ctx.checkpoint()?;
+    ctx.phase("attributes", || Complex::new(dt, params.size_order))
+}
+
+/// Steps 1–3 on raw points: the final UFM state (phases `delaunay`, `attributes`,
+/// `init`, `iterate`).
+pub fn run_ufm(
+    points: &[DVec3],
+    params: &UfmParams,
+    ctx: &mut RunCtx,
+) -> Result<UfmState, MethodError> {
+    params.validate()?;
+    let cx = build_complex(points, params, ctx)?;
+    ctx.checkpoint()?;
+    let st = engine::run(cx, params, ctx)?;
+    ctx.timer.phases.push(("init".into(), st.init_s));
+    ctx.timer.phases.push(("iterate".into(), st.iterate_s));
+    Ok(st)
+}
+
+/// The output facets (ASSUMPTION A-11), as Delaunay vertex triples.
+pub fn output_facets(st: &UfmState, output: OutputSet) -> Vec<u32> {
+    let facets = st.cx.facets();
+    match output {
+        // ASSUMPTION A-11 (default): F_out = {t : M_t = 3}.
+        OutputSet::MatchedFacets => (0..facets.len() as u32)
+            .filter(|&f| st.m[f as usize] == 3)
+            .collect(),
+        // Literal alternative: the facets of the fully matched umbrellas.
+        OutputSet::FullUmbrellas => {
+            let g = engine::grades(&st.cx, &st.inu, &st.m);
+            (0..facets.len() as u32)
+                .filter(|&f| {
+                    st.m[f as usize] == 3 && facets[f as usize].v.iter().any(|&v| g[v as usize])
+                })
+                .collect()
+        }
+    }
+}
+
+/// Orients every component consistently (BFS over manifold edges) and outward (positive
+/// signed volume about the component's first vertex; meaningful for closed components).
+fn orient_outward(mesh: &mut TriMesh) -> Result<(), MethodError> {
+    orient_consistently(mesh)?;
+    let topo = MeshTopology::new(mesh);
+    let (nc, comp) = topo.face_components();
+    let mut origin = vec![None::<DVec3>; nc];
+    let mut vol = vec![0.0f64; nc];
+    for (f, face) in mesh.faces().iter().enumerate() {
+        let c = comp[f];
+        if c as usize >= nc {
+            continue;
+        }
+        let [a, b, d] = face.map(|x| mesh.vertices()[x as usize]);
+        let o = *origin[c as usize].get_or_insert(a);
+        vol[c as usize] += (a - o).dot((b - o).cross(d - o));
+    }
+    let flip: Vec<bool> = (0..mesh.n_faces())
+        .map(|f| (comp[f] as usize) < nc && vol[comp[f] as usize] < 0.0)
+        .collect();
+    mesh.flip_faces(&flip);
+    Ok(())
+}
+
+/// One-line record of the ASSUMPTION switches in force.
+fn assumption_flags(p: &UfmParams) -> String {
+    format!(
+        "A-01=exact-dedup A-02=facet-id A-03=open-ball A-04=skip+rebuild A-05=max-min-key \
+         A-06={:?} A-07=converged/fixed/cycle{}/patience:{}/max:{} A-08=freeze:{} \
+         A-09=lock:{} A-11={:?} init={:?} update={:?}",
+        p.size_order,
+        matching::CYCLE_MEMORY,
+        p.patience,
+        p.max_iter,
+        p.freeze_full,
+        p.lock_matched,
+        p.output,
+        p.init,
+        p.update
+    )
+}
+
+impl Reconstructor for Ufm {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn reconstruct(
+        &self,
+        cloud: &PointCloud,
+        ctx: &mut RunCtx,
+    ) -> Result<Reconstruction, MethodError> {
+        let p = &self.params;
+        p.validate()?;
+        let input = cloud.positions();
+        let n = input.len();
+        if n >= u32::MAX as usize {
+            return Err(MethodError::InvalidInput(format!(
+                "{n} points exceed u32 range"
+            )));
+        }
+        let t_start = Instant::now();
+        let st = run_ufm(input, p, ctx)?;
+        let dt_s = ctx.timer.seconds("delaunay");
+        let t_out = Instant::now();
+        let dt = &st.cx.dt;
+        let nv = dt.n_vertices();
+        let facets = st.cx.facets();
+        let out = output_facets(&st, p.output);
+        let faces: Vec<[u32; 3]> = out
+            .iter()
+            .map(|&f| facets[f as usize].v.map(|v| dt.input_of_vertex(v)))
+            .collect();
+        // Every input point is a vertex (interpolation); exact duplicates (A-01) are
+        // unreferenced and listed as refused.
+        let refused: Vec<u32> = (0..n as u32)
+            .filter(|&i| dt.input_of_vertex(dt.vertex_of_input(i as usize)) != i)
+            .collect();
+        let mut mesh = TriMesh::new(input.to_vec(), faces)?;
+        orient_outward(&mut mesh)?;
+        let topo = MeshTopology::new(&mesh);
+        let rep = analyze_with(&mesh, &topo);
+        let output_s = t_out.elapsed().as_secs_f64();
+        ctx.timer.phases.push(("output".into(), output_s));
+
+        let mut d = Diagnostics::new();
+        let matched = st.trace.last().copied().unwrap_or(0.0);
+        num(&mut d, "matching", 100.0 * matched);
+        d.insert(
+            "matching_trace".into(),
+            Diagnostic::Series(st.trace.iter().map(|x| 100.0 * x).collect()),
+        );
+        num(&mut d, "iterations", st.iterations as f64);
+        d.insert("stop_rule".into(), Diagnostic::Text(st.stop.name().into()));
+        let g = engine::grades(&st.cx, &st.inu, &st.m);
+        num(
+            &mut d,
+            "unmatched_points",
+            g.iter().filter(|&&x| !x).count() as f64,
+        );
+        num(&mut d, "vertices", nv as f64);
+        num(&mut d, "triangles", out.len() as f64);
+        if let Some(genus) = p.genus {
+            let df = (2 * nv as i64 + 4 * (genus as i64 - 1) - out.len() as i64).unsigned_abs();
+            num(&mut d, "delta_f", df as f64);
+        }
+        num(&mut d, "duplicates", refused.len() as f64);
+        num(&mut d, "delaunay_triangles", facets.len() as f64);
+        num(
+            &mut d,
+            "gabriel_triangles",
+            st.cx.gabriel.iter().filter(|&&x| x).count() as f64,
+        );
+        let c = st.counters;
+        num(&mut d, "init_fallbacks", c.init_fallbacks as f64);
+        num(&mut d, "lock_fallbacks", c.lock_fallbacks as f64);
+        num(&mut d, "skipped_cascades", c.skipped_cascades as f64);
+        num(&mut d, "dropped_cycles", c.dropped_cycles as f64);
+        num(&mut d, "build_failures", c.build_failures as f64);
+        num(&mut d, "pinched_vertices", rep.non_manifold_vertices as f64);
+        num(&mut d, "non_manifold_edges", rep.non_manifold_edges as f64);
+        num(&mut d, "boundary_edges", rep.boundary_edges as f64);
+        num(&mut d, "boundary_loops", rep.n_boundary_loops() as f64);
+        num(&mut d, "components", rep.components as f64);
+        num(&mut d, "watertight", rep.watertight as u8 as f64);
+        num(&mut d, "dt_s", dt_s);
+        num(&mut d, "ufm_s", t_start.elapsed().as_secs_f64() - dt_s);
+        d.insert("assumptions".into(), Diagnostic::Text(assumption_flags(p)));
+        Ok(Reconstruction {
+            mesh,
+            refused,
+            diagnostics: d,
+        })
+    }
+}

@@ -1,0 +1,355 @@
+//! `ufm-mesh`: normal estimation from local mesh matching, Algorithm B of Ma's thesis,
+//! chapter 4 (spec 000 §1.2.3, Eq. 4.5–4.7).
+//!
+//! UFM runs up to the chosen state (ASSUMPTION B-01: `final` by default, or `initial`);
+//! then, per point, if at least 3 facets of its umbrella are fully matched, the normal
+//! is the `M_f`-times-angle weighted average of *all* its umbrella facet normals taken in
+//! the umbrella's cyclic order (Eq. 4.5/4.6); otherwise (or when the average cancels,
+//! B-03) a Gaussian-weighted plane fit (Eq. 4.7, `reconbench-normals`' WPF) over the
+//! points of the Delaunay triangles at the point that belong to any umbrella
+//! (`DT(U)_v`, B-02). With `rings = 2` (B-05) every normal is the weighted plane fit over
+//! the point and its two-ring neighbours. Optional MST orientation (Hoppe; B-04).
+
+use glam::DVec3;
+use rayon::prelude::*;
+use reconbench_geom::PointCloud;
+use reconbench_geom::method::{
+    Diagnostic, Diagnostics, MethodError, NormalEstimator, Normals, RunCtx,
+};
+use reconbench_geom::spatial::PointIndex;
+use reconbench_normals::orient_mst;
+use reconbench_normals::plane_fit::fit_plane_normal;
+use serde::{Deserialize, Serialize};
+
+use super::engine::UfmState;
+use super::params::{Init, UfmParams};
+use super::umbrella::LinkGraph;
+
+/// Registry name.
+pub const NAME: &str = "ufm-mesh";
+
+/// Which UFM state the normals are computed from (ASSUMPTION B-01).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum MatchState {
+    /// The initial umbrellas (iteration 0).
+    Initial,
+    /// The state UFM stops in (the default).
+    #[default]
+    Final,
+}
+
+/// Parameters of [`UfmMesh`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct UfmMeshParams {
+    /// ASSUMPTION B-01: UFM state used.
+    pub state: MatchState,
+    /// 1 = Algorithm B; 2 = the two-ring variant (ASSUMPTION B-05: weighted plane fit
+    /// over the point and its two-ring neighbours).
+    pub rings: u32,
+    /// Neighbours of the MST orientation graph (ASSUMPTION B-04: 10); 0 leaves normals
+    /// unoriented.
+    pub orient_k: usize,
+    /// UFM: most update iterations (A-07 iv).
+    pub max_iter: usize,
+    /// UFM: starting cluster of the initial umbrellas.
+    pub init: Init,
+    /// UFM: lock (3) facets during the update.
+    pub lock_matched: bool,
+}
+
+impl Default for UfmMeshParams {
+    fn default() -> Self {
+        Self {
+            state: MatchState::Final,
+            rings: 1,
+            orient_k: 10,
+            max_iter: 200,
+            init: Init::Gabriel,
+            lock_matched: true,
+        }
+    }
+}
+
+/// Name, unit and one-line doc of every parameter, for the harness registry.
+pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
+    (
+        "state",
+        "",
+        "B-01: UFM state the normals use: final (default) or initial",
+    ),
+    (
+        "rings",
+        "count",
+        "1 = Algorithm B; 2 = two-ring weighted plane fit (B-05)",
+    ),
+    (
+        "orient_k",
+        "count",
+        "neighbours of the MST orientation graph (B-04: 10); 0 leaves normals unoriented",
+    ),
+    ("max_iter", "count", "UFM: most update iterations (A-07)"),
+    ("init", "", "UFM: initial cluster, gabriel or delaunay"),
+    (
+        "lock_matched",
+        "",
+        "UFM: (3) facets non-removable during the update (A-09)",
+    ),
+];
+
+/// The `ufm-mesh` normal estimator.
+#[derive(Debug, Clone, Default)]
+pub struct UfmMesh {
+    /// Parameters.
+    pub params: UfmMeshParams,
+}
+
+impl UfmMesh {
+    /// An estimator with validated parameters.
+    pub fn new(params: UfmMeshParams) -> Result<Self, MethodError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
+impl UfmMeshParams {
+    /// Checks ranges.
+    pub fn validate(&self) -> Result<(), MethodError> {
+        if !(1..=2).contains(&self.rings) {
+            return Err(MethodError::InvalidParameter {
+                name: "rings".into(),
+                message: format!("must be 1 or 2, got {}", self.rings),
+            });
+        }
+        self.ufm().validate()
+    }
+
+    fn ufm(&self) -> UfmParams {
+        UfmParams {
+            max_iter: match self.state {
+                MatchState::Initial => 0,
+                MatchState::Final => self.max_iter,
+            },
+            init: self.init,
+            lock_matched: self.lock_matched,
+            ..UfmParams::default()
+        }
+    }
+}
+
+/// Which branch produced a normal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Branch {
+    /// Matching-weighted facet average (Eq. 4.5).
+    FacetAverage,
+    /// Weighted plane fit over `DT(U)_v` (Eq. 4.7) or the two-ring set.
+    PlaneFit,
+    /// Degenerate neighbourhood: 10 nearest neighbours (B-02's last fallback).
+    Knn,
+}
+
+/// WPF of Eq. 4.7 about `pts[c]` over the points `q` (ASSUMPTION B-08:
+/// `σ² = d_max² / 3`, `d_max` the distance to the farthest point of `q`).
+fn wpf(pts: &[DVec3], q: &[u32], c: u32) -> DVec3 {
+    let pc = pts[c as usize];
+    let d2 = q
+        .iter()
+        .map(|&j| pts[j as usize].distance_squared(pc))
+        .fold(0.0, f64::max);
+    if q.len() < 3 || d2 <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let s2 = d2 / 3.0;
+    fit_plane_normal(pts, q, |x| (-x.distance_squared(pc) / s2).exp())
+}
+
+/// Per-vertex result of the first pass.
+struct Local {
+    ring: Vec<u32>,
+    normal: DVec3,
+    branch: Branch,
+}
+
+/// Algorithm B on a UFM state: one normal per Delaunay vertex (unoriented) and its
+/// branch. `rings` = 1 or 2.
+pub fn estimate_from_state(st: &UfmState, rings: u32) -> (Vec<DVec3>, Vec<Branch>) {
+    let cx = &st.cx;
+    let pts = cx.dt.vertices();
+    let facets = cx.facets();
+    let nv = cx.n_vertices();
+    let m = &st.m;
+    let locals: Vec<Local> = (0..nv)
+        .into_par_iter()
+        .map_init(
+            || (LinkGraph::default(), Vec::new(), Vec::new(), Vec::new()),
+            |(g, fl, ring, q), v| {
+                cx.prepare(v, g);
+                let base = cx.off[v] as usize;
+                let row = cx.row(v);
+                g.cycle(|i| st.inu[base + i], fl, ring);
+                if rings == 2 {
+                    return Local {
+                        ring: ring.clone(),
+                        normal: DVec3::ZERO,
+                        branch: Branch::PlaneFit,
+                    };
+                }
+                let pv = pts[v];
+                // Line 1-2: |U(f̄)_v| >= 3 (half the average valence).
+                let ubar = fl
+                    .iter()
+                    .filter(|&&i| m[row[i as usize] as usize] == 3)
+                    .count();
+                if ubar >= 3 {
+                    let k = fl.len();
+                    let mut sum = DVec3::ZERO;
+                    let mut wsum = 0.0;
+                    for j in 0..k {
+                        let a = pts[ring[j] as usize] - pv;
+                        let b = pts[ring[(j + 1) % k] as usize] - pv;
+                        let nrm = a.cross(b).normalize_or_zero();
+                        let cos = a.dot(b) / (a.length() * b.length());
+                        let theta = cos.clamp(-1.0, 1.0).acos();
+                        // Eq. 4.6: w_i = M_{f_i} θ_i.
+                        let w = m[row[fl[j] as usize] as usize] as f64 * theta;
+                        sum += w * nrm;
+                        wsum += w;
+                    }
+                    if wsum > 0.0 {
+                        let nn = sum / wsum;
+                        // ASSUMPTION B-03: a cancelling average falls back to WPF.
+                        if nn.length() >= 1e-12 {
+                            return Local {
+                                ring: ring.clone(),
+                                normal: nn.normalize(),
+                                branch: Branch::FacetAverage,
+                            };
+                        }
+                    }
+                }
+                // Lines 11-12 (ASSUMPTION B-02): Q = {v} ∪ points of DT(U)_v.
+                q.clear();
+                q.push(v as u32);
+                for &f in row {
+                    if m[f as usize] >= 1 {
+                        q.extend_from_slice(&facets[f as usize].v);
+                    }
+                }
+                q.sort_unstable();
+                q.dedup();
+                if q.len() < 3 {
+                    q.clear();
+                    q.push(v as u32);
+                    q.extend_from_slice(ring);
+                }
+                Local {
+                    ring: ring.clone(),
+                    normal: wpf(pts, q, v as u32),
+                    branch: Branch::PlaneFit,
+                }
+            },
+        )
+        .collect();
+    let mut normals: Vec<DVec3>;
+    let mut branch: Vec<Branch>;
+    if rings == 2 {
+        // ASSUMPTION B-05: WPF over {v} ∪ Ring2(v), Ring2 from the current umbrellas.
+        let res: Vec<DVec3> = (0..nv)
+            .into_par_iter()
+            .map_init(Vec::new, |q: &mut Vec<u32>, v| {
+                q.clear();
+                q.push(v as u32);
+                for &p in &locals[v].ring {
+                    q.push(p);
+                    q.extend_from_slice(&locals[p as usize].ring);
+                }
+                q.sort_unstable();
+                q.dedup();
+                wpf(pts, q, v as u32)
+            })
+            .collect();
+        normals = res;
+        branch = vec![Branch::PlaneFit; nv];
+    } else {
+        normals = locals.iter().map(|l| l.normal).collect();
+        branch = locals.iter().map(|l| l.branch).collect();
+    }
+    // B-02's last fallback: 10 nearest neighbours for degenerate neighbourhoods.
+    let bad: Vec<usize> = (0..nv).filter(|&v| normals[v] == DVec3::ZERO).collect();
+    if !bad.is_empty()
+        && let Ok(index) = PointIndex::new(pts)
+    {
+        for v in bad {
+            if let Ok(nb) = index.knn(pts[v], 10) {
+                let q: Vec<u32> = nb.iter().map(|x| x.index).collect();
+                normals[v] = wpf(pts, &q, v as u32);
+                branch[v] = Branch::Knn;
+            }
+        }
+    }
+    (normals, branch)
+}
+
+impl NormalEstimator for UfmMesh {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
+        let p = &self.params;
+        p.validate()?;
+        let input = cloud.positions();
+        let st = super::run_ufm(input, &p.ufm(), ctx)?;
+        ctx.checkpoint()?;
+        let (nv_normals, branch) = ctx.phase("normals", || estimate_from_state(&st, p.rings));
+        let dt = &st.cx.dt;
+        let mut normals: Vec<DVec3> = (0..input.len())
+            .map(|i| nv_normals[dt.vertex_of_input(i) as usize])
+            .collect();
+        let mut d = Diagnostics::new();
+        let count = |b: Branch| branch.iter().filter(|&&x| x == b).count() as f64;
+        d.insert(
+            "facet_average".into(),
+            Diagnostic::Number(count(Branch::FacetAverage)),
+        );
+        d.insert(
+            "plane_fit".into(),
+            Diagnostic::Number(count(Branch::PlaneFit)),
+        );
+        d.insert(
+            "knn_fallback".into(),
+            Diagnostic::Number(count(Branch::Knn)),
+        );
+        d.insert(
+            "matching".into(),
+            Diagnostic::Number(100.0 * st.trace.last().copied().unwrap_or(0.0)),
+        );
+        d.insert(
+            "iterations".into(),
+            Diagnostic::Number(st.iterations as f64),
+        );
+        d.insert(
+            "degenerate_neighbourhoods".into(),
+            Diagnostic::Number(normals.iter().filter(|n| **n == DVec3::ZERO).count() as f64),
+        );
+        let oriented = p.orient_k > 0;
+        if oriented {
+            ctx.checkpoint()?;
+            let r = ctx.phase("orient", || orient_mst(input, &mut normals, p.orient_k))?;
+            d.insert(
+                "orient_components".into(),
+                Diagnostic::Number(r.components as f64),
+            );
+            d.insert(
+                "orient_flipped".into(),
+                Diagnostic::Number(r.flipped as f64),
+            );
+        }
+        Ok(Normals {
+            normals,
+            oriented,
+            diagnostics: d,
+        })
+    }
+}

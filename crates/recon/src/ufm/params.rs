@@ -1,0 +1,181 @@
+//! Parameters of `ufm` (spec 000 §1.1 and the assumption register, Appendix A).
+
+use reconbench_geom::method::MethodError;
+use serde::{Deserialize, Serialize};
+
+/// Where the initial umbrellas (Step 2) start from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Init {
+    /// Gabriel triangles `GT_v`, falling back to all of `DT_v` (the thesis, Step 2.1/2.4).
+    #[default]
+    Gabriel,
+    /// All Delaunay triangles `DT_v` (ablation, spec §4.3).
+    Delaunay,
+}
+
+/// Direction of the size level inside a matching class during the update (ASSUMPTION
+/// The initial queue is always large-first (Step 2.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SizeOrder {
+    /// Larger minimum circumsphere removed first (the default, as the initial queue).
+    #[default]
+    LargeFirst,
+    /// Smaller first (ablation).
+    SmallFirst,
+}
+
+/// The output triangle set (ASSUMPTION A-11).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum OutputSet {
+    /// Every facet with `M_f = 3` (the default).
+    #[default]
+    MatchedFacets,
+    /// Only facets of fully matched umbrellas, `⋃_{G_v = 1} U_v` (literal reading).
+    FullUmbrellas,
+}
+
+/// Update scheme of Step 3.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Update {
+    /// Synchronous: every umbrella is rebuilt from the previous iteration's state
+    /// ("in parallel" in the thesis); the result does not depend on the thread count.
+    #[default]
+    Jacobi,
+    /// Vertices in index order, matching indices updated in place after each rebuild
+    /// (non-faithful ablation of spec §1.1.5; sequential).
+    GaussSeidel,
+}
+
+/// Parameters of [`super::Ufm`]. Defaults are the thesis's and the spec's ASSUMPTION
+/// choices.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct UfmParams {
+    /// Starting cluster of the initial umbrellas.
+    pub init: Init,
+    /// ASSUMPTION A-09: make `(3)` facets non-removable during the update (with the A-04
+    /// cascade rule and a rebuild without locks when the result is invalid).
+    pub lock_matched: bool,
+    /// ASSUMPTION A-08: keep fully matched umbrellas as they are (exact optimisation:
+    /// a rebuild reproduces them).
+    pub freeze_full: bool,
+    /// ASSUMPTION A-06: size direction inside a matching class during the update.
+    pub size_order: SizeOrder,
+    /// ASSUMPTION A-11: output triangle set.
+    pub output: OutputSet,
+    /// Update scheme (the thesis: synchronous).
+    pub update: Update,
+    /// ASSUMPTION A-07 (iv): at most this many update iterations (0 = initial
+    /// umbrellas only).
+    pub max_iter: usize,
+    /// ASSUMPTION A-07 (iii): stop when the best matching has not improved for this many
+    /// iterations.
+    pub patience: usize,
+    /// Non-faithful extension (not in the thesis): when the loop reaches a fixed point
+    /// or limit cycle below 100 %, run up to this many "escape" updates that ignore the
+    /// membership level (M_f then size); 0 = the thesis's loop.
+    pub escapes: usize,
+    /// Known genus of the object (metadata, as in the thesis): when given, the result
+    /// reports `delta_f = |2V + 4(G - 1) - F|` (Eq. 3.2) with V the deduplicated count.
+    pub genus: Option<u32>,
+}
+
+impl Default for UfmParams {
+    fn default() -> Self {
+        Self {
+            init: Init::Gabriel,
+            lock_matched: true,
+            freeze_full: true,
+            size_order: SizeOrder::LargeFirst,
+            output: OutputSet::MatchedFacets,
+            update: Update::Jacobi,
+            max_iter: 200,
+            patience: 20,
+            escapes: 0,
+            genus: None,
+        }
+    }
+}
+
+impl UfmParams {
+    /// Checks ranges; returns the first offending parameter.
+    pub fn validate(&self) -> Result<(), MethodError> {
+        if self.max_iter > 100_000 {
+            return Err(MethodError::InvalidParameter {
+                name: "max_iter".into(),
+                message: format!("must be <= 100000, got {}", self.max_iter),
+            });
+        }
+        if self.patience == 0 {
+            return Err(MethodError::InvalidParameter {
+                name: "patience".into(),
+                message: "must be >= 1".into(),
+            });
+        }
+        if self.genus.is_some_and(|g| g > 1_000_000) {
+            return Err(MethodError::InvalidParameter {
+                name: "genus".into(),
+                message: "must be <= 1000000".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Name, unit and one-line doc of every parameter, for the harness registry.
+pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
+    (
+        "init",
+        "",
+        "initial cluster: gabriel (Step 2, falls back to all DT_v) or delaunay",
+    ),
+    (
+        "lock_matched",
+        "",
+        "A-09: (3) facets are non-removable during the update (A-04 cascade rule)",
+    ),
+    (
+        "freeze_full",
+        "",
+        "A-08: keep fully matched umbrellas (exact optimisation)",
+    ),
+    (
+        "size_order",
+        "",
+        "A-06: size order inside a class: large-first or small-first",
+    ),
+    (
+        "output",
+        "",
+        "A-11: output set: matched-facets (M_f = 3) or full-umbrellas",
+    ),
+    (
+        "update",
+        "",
+        "jacobi (synchronous, the thesis) or gauss-seidel (sequential ablation)",
+    ),
+    (
+        "max_iter",
+        "count",
+        "A-07 (iv): most update iterations (0 = initial umbrellas only)",
+    ),
+    (
+        "patience",
+        "count",
+        "A-07 (iii): stop after this many iterations without a better matching",
+    ),
+    (
+        "escapes",
+        "count",
+        "extension: updates ignoring M_f(v) when stuck below 100 % (0 = thesis)",
+    ),
+    (
+        "genus",
+        "count",
+        "known genus (metadata) for the delta_f diagnostic; none = not reported",
+    ),
+];
