@@ -208,17 +208,22 @@ impl GaussTest {
                 };
             }
         }
-        // 3. Average-linkage clustering with the sigma cut (seed 002 §3.5).
-        if !loaded {
-            ws.linkage.load(&ws.lines);
-        }
-        let sizes = ws.linkage.cut(sigma);
+        // 3. Average-linkage clustering with the sigma cut (seed 002 §3.5), and
         // 4. ASSUMPTION W-06: "clusters containing only a few points are discarded" =
         // fewer than max(min_cluster_abs, ceil(min_cluster_frac * L)) lines.
         let min_size = (self.min_cluster_frac * l as f64)
             .ceil()
-            .max(self.min_cluster_abs as f64);
-        let big = sizes.iter().filter(|&&s| f64::from(s) >= min_size).count();
+            .max(self.min_cluster_abs as f64) as usize;
+        let big = if loaded {
+            ws.linkage
+                .cut(sigma)
+                .iter()
+                .filter(|&&s| s as usize >= min_size)
+                .count()
+        } else {
+            // Exact component pruning (see `AverageLinkage::count_big`).
+            ws.linkage.count_big(&ws.lines, sigma, min_size)
+        };
         // ASSUMPTION W-07: zero surviving clusters (sparse normals: smooth curved region)
         // -> not a feature. ASSUMPTION W-09: 2 clusters = edge, 3 or more = corner.
         let class = if big >= self.min_clusters && big <= self.max_clusters && big > 0 {

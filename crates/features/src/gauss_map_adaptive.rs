@@ -204,6 +204,19 @@ impl GaussMapAdaptive {
 /// Number of candidates refined between two time-budget checkpoints.
 const CHECK_EVERY: usize = 64;
 
+/// Refinement steps whose passed outcomes are memoised per candidate (one byte each).
+const MEMO_STEPS: usize = 64;
+
+/// Class of a passed Gauss-map test from its surviving cluster count (ASSUMPTION W-09:
+/// up to 2 = edge, more = corner), as in [`GaussTest::test_point`].
+fn class_of(clusters: u32) -> FeatureClass {
+    if clusters <= 2 {
+        FeatureClass::Edge
+    } else {
+        FeatureClass::Corner
+    }
+}
+
 impl FeatureDetector for GaussMapAdaptive {
     fn name(&self) -> &str {
         "gauss-map-adaptive"
@@ -234,9 +247,22 @@ impl FeatureDetector for GaussMapAdaptive {
         // 2. Refinement.
         let t0 = Instant::now();
         let schedule = p.schedule(k0);
-        // passed_at[i] = step + 1 of the last passed re-test (0 = none): a re-test with the
-        // same step (same k and sigma) would give the same answer, so it is skipped.
-        let mut passed_at: Vec<u16> = vec![0; n];
+        // Exact memo of passed re-tests: the outcome of the test of q at step s depends
+        // only on (q, s) (q's first k_s neighbours and sigma_s are fixed), so every
+        // (q, s) is computed at most once. memo[slot(q) * S + s] = surviving clusters of
+        // the passed test (0 = not yet tested; a failed test removes q for good). Only
+        // the first MEMO_STEPS steps are memoised (steps beyond are re-run).
+        let memo_steps = schedule.len().min(MEMO_STEPS);
+        let mut slot: Vec<u32> = vec![u32::MAX; n];
+        let mut n_slots = 0u32;
+        for (i, _) in cand.iter().enumerate().filter(|(_, c)| **c) {
+            slot[i] = n_slots;
+            n_slots += 1;
+        }
+        let mut memo: Vec<u8> = vec![0; n_slots as usize * memo_steps];
+        let memo_at = |q: usize, s: usize| -> Option<usize> {
+            (s < memo_steps).then(|| slot[q] as usize * memo_steps + s)
+        };
         let mut removed_per_pass = Vec::new();
         let mut tests_run = 0usize;
         let mut tests_skipped = 0usize;
@@ -269,22 +295,26 @@ impl FeatureDetector for GaussMapAdaptive {
                         break;
                     }
                     let (k, sigma) = schedule[step];
+                    let s = step;
                     step += 1;
                     k_cur = k;
-                    // Re-test c and every still-candidate neighbour with (k, sigma).
+                    // Re-test c and every still-candidate neighbour with (k, sigma); a
+                    // memoised pass replays its stored outcome.
                     batch.clear();
-                    batch.extend(
-                        std::iter::once(c as u32)
-                            .chain(m.iter().copied())
-                            .filter(|&q| {
-                                let q = q as usize;
-                                cand[q] && passed_at[q] != step as u16
-                            }),
-                    );
-                    tests_skipped += std::iter::once(c as u32)
-                        .chain(m.iter().copied())
-                        .filter(|&q| cand[q as usize] && passed_at[q as usize] == step as u16)
-                        .count();
+                    for q in std::iter::once(c as u32).chain(m.iter().copied()) {
+                        let qi = q as usize;
+                        if !cand[qi] {
+                            continue;
+                        }
+                        match memo_at(qi, s).map(|a| memo[a]) {
+                            Some(cl) if cl > 0 => {
+                                tests_skipped += 1;
+                                clusters[qi] = u32::from(cl);
+                                class[qi] = class_of(u32::from(cl));
+                            }
+                            _ => batch.push(q),
+                        }
+                    }
                     tests_run += batch.len();
                     batch
                         .par_iter()
@@ -305,7 +335,9 @@ impl FeatureDetector for GaussMapAdaptive {
                             removed += 1;
                         } else {
                             class[q] = o.class;
-                            passed_at[q] = step as u16;
+                            if let (Some(a), Ok(cl)) = (memo_at(q, s), u8::try_from(o.clusters)) {
+                                memo[a] = cl;
+                            }
                         }
                     }
                 }
