@@ -182,6 +182,11 @@ const GAUSS_MAP_ADAPTIVE_DOCS: &[ParamDoc] = &[
         doc: "ASSUMPTION W-13: drop candidates with at most one candidate neighbour",
     },
     ParamDoc {
+        name: "isolated_sequential",
+        unit: "",
+        doc: "ASSUMPTION W-13: apply the isolated rule in index order with immediate effect (cascades along lines) instead of all at once",
+    },
+    ParamDoc {
         name: "recount_with_current_k",
         unit: "",
         doc: "ASSUMPTION W-10: count candidates in the current-k neighbourhood",
