@@ -79,7 +79,8 @@ pub struct GaussMapAdaptiveParams {
     pub flat_tau: f64,
     /// Flatness reference line (ASSUMPTION W-04).
     pub flat_reference: FlatReference,
-    /// ASSUMPTION W-18: sine floor for triangles in the flatness statistic (0 = all).
+    /// ASSUMPTION W-18: sine floor for triangles in the flatness statistic (default 0.2,
+    /// a deviation; 0 = all triangles, spec-literal).
     pub flat_min_sine: f64,
     /// Minimum cluster size as a fraction of the normals (ASSUMPTION W-06: 0.10).
     pub min_cluster_frac: f64,
@@ -111,7 +112,7 @@ impl Default for GaussMapAdaptiveParams {
             recount_with_current_k: false,
             flat_tau: THESIS_FLAT_TAU,
             flat_reference: FlatReference::PrincipalAxis,
-            flat_min_sine: 0.0,
+            flat_min_sine: 0.2,
             min_cluster_frac: 0.10,
             min_cluster_abs: 3,
             min_clusters: 2,

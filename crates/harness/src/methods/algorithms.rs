@@ -75,7 +75,7 @@ const FLAT_DOCS: [ParamDoc; 8] = [
     ParamDoc {
         name: "flat_min_sine",
         unit: "",
-        doc: "ASSUMPTION W-18: sine floor for triangles in the flatness statistic (0 = all)",
+        doc: "ASSUMPTION W-18: sine floor for triangles in the flatness statistic (default 0.2, a deviation; 0 = all, spec-literal)",
     },
     ParamDoc {
         name: "min_cluster_frac",
