@@ -266,7 +266,8 @@ impl AverageLinkage {
             }
             x
         }
-        for i in 0..l {
+        let mut components = l;
+        'pairs: for i in 0..l {
             let a = lines[i];
             for (j, b) in lines.iter().enumerate().skip(i + 1) {
                 if a.dot(*b).abs() >= cos_s {
@@ -278,9 +279,25 @@ impl AverageLinkage {
                         // Lower root wins: deterministic.
                         let (lo, hi) = if ri < rj { (ri, rj) } else { (rj, ri) };
                         self.parent[hi as usize] = lo;
+                        components -= 1;
+                        if components == 1 {
+                            break 'pairs;
+                        }
                     }
                 }
             }
+        }
+        if components == 1 {
+            // One component (typical of smooth regions): cluster the input directly.
+            if l < min_size {
+                return 0;
+            }
+            self.load(lines);
+            return self
+                .cut(sigma)
+                .iter()
+                .filter(|&&s| s as usize >= min_size)
+                .count();
         }
         self.order.clear();
         for i in 0..l as u32 {
