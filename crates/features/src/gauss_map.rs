@@ -208,17 +208,22 @@ impl GaussTest {
                 };
             }
         }
-        // 3. Average-linkage clustering with the sigma cut (seed 002 §3.5).
-        if !loaded {
-            ws.linkage.load(&ws.lines);
-        }
-        let sizes = ws.linkage.cut(sigma);
+        // 3. Average-linkage clustering with the sigma cut (seed 002 §3.5), and
         // 4. ASSUMPTION W-06: "clusters containing only a few points are discarded" =
         // fewer than max(min_cluster_abs, ceil(min_cluster_frac * L)) lines.
         let min_size = (self.min_cluster_frac * l as f64)
             .ceil()
-            .max(self.min_cluster_abs as f64);
-        let big = sizes.iter().filter(|&&s| f64::from(s) >= min_size).count();
+            .max(self.min_cluster_abs as f64) as usize;
+        let big = if loaded {
+            ws.linkage
+                .cut(sigma)
+                .iter()
+                .filter(|&&s| s as usize >= min_size)
+                .count()
+        } else {
+            // Exact component pruning (see `AverageLinkage::count_big`).
+            ws.linkage.count_big(&ws.lines, sigma, min_size)
+        };
         // ASSUMPTION W-07: zero surviving clusters (sparse normals: smooth curved region)
         // -> not a feature. ASSUMPTION W-09: 2 clusters = edge, 3 or more = corner.
         let class = if big >= self.min_clusters && big <= self.max_clusters && big > 0 {
@@ -301,8 +306,10 @@ pub struct GaussMapParams {
     /// (ASSUMPTION W-04).
     pub flat_reference: FlatReference,
     /// ASSUMPTION W-18 (not in the spec): triangles whose angle at p has a sine below
-    /// this are left out of the flatness statistic (they stay in the clustering). 0 (the
-    /// spec-literal default) uses all; 0.2 lets smooth curved regions pass the pre-test.
+    /// this are left out of the flatness statistic (they stay in the clustering).
+    /// Default 0.2 (a deviation, see docs/methods/features.md: it reproduces the thesis's
+    /// noise-free Table 2 and keeps smooth curved regions flat); 0 is the spec-literal
+    /// statistic over all triangles.
     pub flat_min_sine: f64,
     /// Clusters smaller than this fraction of the normals are dropped (ASSUMPTION W-06:
     /// 0.10; the spec's default 0.05 lets the mixed-sheet normals of regular grids form
@@ -326,7 +333,7 @@ impl Default for GaussMapParams {
             sigma: 0.6,
             flat_tau: THESIS_FLAT_TAU,
             flat_reference: FlatReference::PrincipalAxis,
-            flat_min_sine: 0.0,
+            flat_min_sine: 0.2,
             min_cluster_frac: 0.10,
             min_cluster_abs: 3,
             min_clusters: 2,

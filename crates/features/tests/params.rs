@@ -20,6 +20,11 @@ fn defaults_are_the_thesis_values() {
         (20, 0.1, 1.1, 1)
     );
     assert_eq!((a.stop_share, a.sigma_max, a.k_min), (0.3, 1.2, 8));
+    // Documented deviations (docs/methods/features.md): W-06 0.10 (spec 0.05), W-18 0.2
+    // (spec-literal 0), W-13 isolated rule at once (not cascading).
+    assert_eq!((g.min_cluster_frac, g.flat_min_sine), (0.10, 0.2));
+    assert_eq!((a.min_cluster_frac, a.flat_min_sine), (0.10, 0.2));
+    assert!(a.isolated_rule && !a.isolated_sequential);
     let p = PcaVariationParams::default();
     assert_eq!(p.mode, PcaMode::Multi);
     assert_eq!(

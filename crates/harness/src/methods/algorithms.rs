@@ -77,7 +77,7 @@ const FLAT_DOCS: [ParamDoc; 8] = [
     ParamDoc {
         name: "flat_min_sine",
         unit: "",
-        doc: "ASSUMPTION W-18: sine floor for triangles in the flatness statistic (0 = all)",
+        doc: "ASSUMPTION W-18: sine floor for triangles in the flatness statistic (default 0.2, a deviation; 0 = all, spec-literal)",
     },
     ParamDoc {
         name: "min_cluster_frac",
@@ -182,6 +182,11 @@ const GAUSS_MAP_ADAPTIVE_DOCS: &[ParamDoc] = &[
         name: "isolated_rule",
         unit: "",
         doc: "ASSUMPTION W-13: drop candidates with at most one candidate neighbour",
+    },
+    ParamDoc {
+        name: "isolated_sequential",
+        unit: "",
+        doc: "ASSUMPTION W-13: apply the isolated rule in index order with immediate effect (cascades along lines) instead of all at once",
     },
     ParamDoc {
         name: "recount_with_current_k",
