@@ -16,6 +16,7 @@
 //! See `docs/methods/ufm.md`.
 
 pub mod engine;
+pub mod geometry;
 pub mod matching;
 pub mod normals;
 pub mod params;
