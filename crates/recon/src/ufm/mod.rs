@@ -147,7 +147,7 @@ fn assumption_flags(p: &UfmParams) -> String {
     format!(
         "A-01=exact-dedup A-02=facet-id A-03=open-ball A-04=skip+rebuild A-05=max-min-key \
          A-06={:?} A-07=converged/fixed/cycle{}/patience:{}/max:{} A-08=freeze:{} \
-         A-09=lock:{} A-11={:?} init={:?} update={:?}",
+         A-09=lock:{} A-11={:?} init={:?} update={:?} escapes={} max_fold={}",
         p.size_order,
         matching::CYCLE_MEMORY,
         p.patience,
@@ -156,7 +156,9 @@ fn assumption_flags(p: &UfmParams) -> String {
         p.lock_matched,
         p.output,
         p.init,
-        p.update
+        p.update,
+        p.escapes,
+        p.max_fold
     )
 }
 
@@ -237,6 +239,8 @@ impl Reconstructor for Ufm {
         num(&mut d, "skipped_cascades", c.skipped_cascades as f64);
         num(&mut d, "dropped_cycles", c.dropped_cycles as f64);
         num(&mut d, "build_failures", c.build_failures as f64);
+        num(&mut d, "fold_repairs", c.fold_repairs as f64);
+        num(&mut d, "escapes_used", st.escapes as f64);
         num(&mut d, "pinched_vertices", rep.non_manifold_vertices as f64);
         num(&mut d, "non_manifold_edges", rep.non_manifold_edges as f64);
         num(&mut d, "boundary_edges", rep.boundary_edges as f64);
