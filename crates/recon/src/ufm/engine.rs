@@ -61,18 +61,6 @@ impl Complex {
     }
 }
 
-/// `diam(t) = 2R` of every facet (+∞ for a degenerate one), in parallel.
-fn diameters(dt: &Delaunay) -> Vec<f64> {
-    let pts = dt.vertices();
-    dt.facets()
-        .par_iter()
-        .map(|f| {
-            let [a, b, c] = f.v.map(|x| pts[x as usize]);
-            circum_diameter(a, b, c)
-        })
-        .collect()
-}
-
 /// Diameter of the circumcircle of triangle `abc`: `|ab||bc||ca| / (2 Area)`;
 /// `+∞` when the area is (numerically) zero.
 pub fn circum_diameter(a: DVec3, b: DVec3, c: DVec3) -> f64 {
@@ -85,20 +73,21 @@ pub fn circum_diameter(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     if d.is_finite() { d } else { f64::INFINITY }
 }
 
-/// Rank of every facet under (diameter in the given direction, then id).
+/// Rank of every facet under (diameter in the given direction, then id), from a
+/// parallel sort of flat `(key, id)` pairs (no indirection in the comparisons).
+/// Diameters are non-negative or `+∞`, so their IEEE bits order like the values.
 fn ranks(diam: &[f64], large_first: bool) -> Vec<u32> {
-    let mut ids: Vec<u32> = (0..diam.len() as u32).collect();
-    ids.par_sort_unstable_by(|&x, &y| {
-        let (dx, dy) = (diam[x as usize], diam[y as usize]);
-        let o = if large_first {
-            dy.total_cmp(&dx)
-        } else {
-            dx.total_cmp(&dy)
-        };
-        o.then(x.cmp(&y))
-    });
+    let mut keyed: Vec<(u64, u32)> = diam
+        .par_iter()
+        .enumerate()
+        .map(|(i, &d)| {
+            let bits = d.max(0.0).to_bits();
+            (if large_first { !bits } else { bits }, i as u32)
+        })
+        .collect();
+    keyed.par_sort_unstable();
     let mut rank = vec![0u32; diam.len()];
-    for (r, &f) in ids.iter().enumerate() {
+    for (r, &(_, f)) in keyed.iter().enumerate() {
         rank[f as usize] = r as u32;
     }
     rank
@@ -106,7 +95,7 @@ fn ranks(diam: &[f64], large_first: bool) -> Vec<u32> {
 
 impl Complex {
     /// Step 1 after the triangulation: CSR of `DT_v`, slots, diameters, ranks, Gabriel
-    /// flags (all in parallel where it pays).
+    /// flags, all in parallel (per vertex for the CSR, per facet for the rest).
     pub fn new(dt: Delaunay, size_order: SizeOrder) -> Result<Self, MethodError> {
         let nv = dt.n_vertices();
         let facets = dt.facets();
@@ -116,35 +105,56 @@ impl Complex {
                 facets.len()
             )));
         }
+        // CSR of DT_v: row lengths in parallel, prefix sum, then one parallel copy per
+        // vertex block into disjoint ranges.
+        let lens: Vec<u32> = (0..nv as u32)
+            .into_par_iter()
+            .map(|v| dt.facets_of_vertex(v).len() as u32)
+            .collect();
         let mut off = Vec::with_capacity(nv + 1);
         off.push(0u32);
-        for v in 0..nv {
-            let n = dt.facets_of_vertex(v as u32).len() as u32;
-            off.push(off[v] + n);
+        let mut acc = 0u32;
+        for &n in &lens {
+            acc += n;
+            off.push(acc);
         }
-        let mut items = Vec::with_capacity(off[nv] as usize);
-        for v in 0..nv {
-            items.extend_from_slice(dt.facets_of_vertex(v as u32));
-        }
-        let mut slot = vec![[0u32; 3]; facets.len()];
-        for v in 0..nv {
-            for s in off[v]..off[v + 1] {
-                let f = items[s as usize] as usize;
-                let k = facets[f]
-                    .v
-                    .iter()
-                    .position(|&x| x as usize == v)
-                    .expect("facet contains its vertex");
-                slot[f][k] = s;
+        let mut items = vec![0u32; acc as usize];
+        {
+            let mut parts: Vec<(usize, &mut [u32])> = Vec::with_capacity(nv);
+            let mut rest = items.as_mut_slice();
+            for v in 0..nv {
+                let (a, b) = rest.split_at_mut(lens[v] as usize);
+                parts.push((v, a));
+                rest = b;
             }
+            parts
+                .into_par_iter()
+                .with_min_len(256)
+                .for_each(|(v, dst)| dst.copy_from_slice(dt.facets_of_vertex(v as u32)));
         }
-        let diam = diameters(&dt);
+        // Per facet, in parallel: the CSR slots of its three corners (binary search in
+        // the increasing rows), the diameter and the exact Gabriel flag.
+        let pts = dt.vertices();
+        let (slot, (diam, gabriel)): (Vec<[u32; 3]>, (Vec<f64>, Vec<bool>)) = (0..facets.len())
+            .into_par_iter()
+            .map(|f| {
+                let fv = facets[f].v;
+                let slot = fv.map(|x| {
+                    let (a, b) = (off[x as usize] as usize, off[x as usize + 1] as usize);
+                    let k = items[a..b]
+                        .binary_search(&(f as u32))
+                        .expect("facet is in the rows of its vertices");
+                    (a + k) as u32
+                });
+                let [a, b, c] = fv.map(|x| pts[x as usize]);
+                (slot, (circum_diameter(a, b, c), dt.is_gabriel(f as u32)))
+            })
+            .unzip();
         let rank_init = ranks(&diam, true);
         let rank_update = match size_order {
             SizeOrder::LargeFirst => rank_init.clone(),
             SizeOrder::SmallFirst => ranks(&diam, false),
         };
-        let gabriel = dt.gabriel_flags();
         Ok(Self {
             dt,
             off,
