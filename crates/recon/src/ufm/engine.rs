@@ -135,7 +135,8 @@ impl Complex {
         // Per facet, in parallel: the CSR slots of its three corners (binary search in
         // the increasing rows), the diameter and the exact Gabriel flag.
         let pts = dt.vertices();
-        let (slot, (diam, gabriel)): (Vec<[u32; 3]>, (Vec<f64>, Vec<bool>)) = (0..facets.len())
+        type PerFacet = (Vec<[u32; 3]>, (Vec<f64>, Vec<bool>));
+        let (slot, (diam, gabriel)): PerFacet = (0..facets.len())
             .into_par_iter()
             .map(|f| {
                 let fv = facets[f].v;
