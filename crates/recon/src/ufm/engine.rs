@@ -223,8 +223,10 @@ const MAX_FOLD_REPAIRS: usize = 3;
 /// The local facet of the current umbrella (`s.g.alive`) to demote because the
 /// umbrella folds back by more than `bound` radians at one of its ribs: the facet with
 /// the largest sum of over-bound fold angles at its two ribs, skipping facets already
-/// demoted. `None` when the umbrella does not fold.
-fn most_folded(s: &mut Scratch, pts: &[DVec3], v: u32, bound: f64) -> Option<u32> {
+/// demoted; ties (the two facets of a single fold) go to the facet that comes first in
+/// the removal `order` (worse class, then larger), so the choice does not depend on
+/// vertex or facet numbering. `None` when the umbrella does not fold.
+fn most_folded(s: &mut Scratch, pts: &[DVec3], v: u32, bound: f64, order: &[u32]) -> Option<u32> {
     let Scratch {
         g,
         cyc,
@@ -239,13 +241,14 @@ fn most_folded(s: &mut Scratch, pts: &[DVec3], v: u32, bound: f64) -> Option<u32
     if k == 0 || ang.iter().all(|&a| a <= bound) {
         return None;
     }
+    let pos = |f: u32| order.iter().position(|&x| x == f).unwrap_or(usize::MAX);
     // ang[j] is at the rib between facets j and j + 1.
     let over = |a: f64| if a > bound { a } else { 0.0 };
     (0..k)
         .filter(|&j| !demoted.contains(&cyc[j]))
         .map(|j| (over(ang[(j + k - 1) % k]) + over(ang[j]), cyc[j]))
         .filter(|&(sc, _)| sc > 0.0)
-        .max_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)))
+        .max_by(|a, b| a.0.total_cmp(&b.0).then(pos(b.1).cmp(&pos(a.1))))
         .map(|(_, f)| f)
 }
 
@@ -270,7 +273,7 @@ fn build_checked(
     s.demoted.clear();
     if bound > 0.0 && res.is_ok() {
         for _ in 0..MAX_FOLD_REPAIRS {
-            let Some(f) = most_folded(s, pts, v, bound) else {
+            let Some(f) = most_folded(s, pts, v, bound, &order) else {
                 break;
             };
             s.demoted.push(f);
