@@ -293,19 +293,26 @@ fn non_converging_input_is_still_edge_manifold() {
 #[test]
 fn deterministic_across_thread_counts() {
     let pts = synth("torus-knot", "blue-noise", 5000, None, 5);
-    let go = |threads: usize| {
+    let go = |threads: usize, p: UfmParams| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| run(&pts, params_g(1)))
+            .install(|| run(&pts, p))
     };
-    let (a, b) = (go(1), go(2));
-    assert_eq!(a.mesh.faces(), b.mesh.faces());
-    assert_eq!(
-        a.diagnostics.get("matching_trace"),
-        b.diagnostics.get("matching_trace")
-    );
+    let repaired = UfmParams {
+        max_fold: 90.0,
+        escapes: 5,
+        ..params_g(1)
+    };
+    for p in [params_g(1), repaired] {
+        let (a, b) = (go(1, p.clone()), go(2, p));
+        assert_eq!(a.mesh.faces(), b.mesh.faces());
+        assert_eq!(
+            a.diagnostics.get("matching_trace"),
+            b.diagnostics.get("matching_trace")
+        );
+    }
 }
 
 /// Exact duplicates are merged: unreferenced vertices, listed as refused; the
