@@ -23,7 +23,11 @@ fn main() {
     let pts = reconbench_synth::generate(&spec, seed)
         .expect("data")
         .positions;
-    let st = run_ufm(&pts, &UfmParams::default(), &mut RunCtx::new(1)).expect("ufm");
+    let params: UfmParams = match std::env::var("UFM_PARAMS") {
+        Ok(j) => serde_json::from_str(&j).expect("UFM_PARAMS: UfmParams JSON"),
+        Err(_) => UfmParams::default(),
+    };
+    let st = run_ufm(&pts, &params, &mut RunCtx::new(1)).expect("ufm");
     let cx = &st.cx;
     let g = engine::grades(cx, &st.inu, &st.m);
     let facets = cx.facets();
@@ -31,6 +35,32 @@ fn main() {
         let k = facets[f as usize].v.iter().position(|&x| x == w).unwrap();
         st.inu[cx.slot[f as usize][k] as usize]
     };
+    if std::env::var("FOLDS").is_ok() {
+        // Histogram of the maximum fold angle per umbrella, split by grade.
+        let pts = cx.dt.vertices();
+        let mut g_link = reconbench_recon::ufm::umbrella::LinkGraph::default();
+        let (mut fs, mut ring, mut ang) = (Vec::new(), Vec::new(), Vec::new());
+        let mut hist = [[0usize; 18]; 2];
+        for v in 0..cx.n_vertices() {
+            cx.prepare(v, &mut g_link);
+            let base = cx.off[v] as usize;
+            g_link.cycle(|i| st.inu[base + i], &mut fs, &mut ring);
+            reconbench_recon::ufm::geometry::fold_angles(pts, v as u32, &ring, &mut ang);
+            let mx = ang.iter().copied().fold(0.0f64, f64::max).to_degrees();
+            hist[g[v] as usize][((mx / 10.0) as usize).min(17)] += 1;
+        }
+        println!("max fold per umbrella, 10-degree bins 0..180: [unmatched, matched]");
+        for b in 0..18 {
+            println!(
+                "{:3}-{:3}: {:6} {:6}",
+                b * 10,
+                b * 10 + 10,
+                hist[0][b],
+                hist[1][b]
+            );
+        }
+        return;
+    }
     let mut shown = 0;
     let extra: Vec<usize> = args.iter().skip(4).map(|s| s.parse().unwrap()).collect();
     for v in 0..cx.n_vertices() {

@@ -26,7 +26,11 @@ fn main() {
         perturbations,
         scan: None,
     };
-    let g = reconbench_synth::generate(&spec, 1).expect("data");
+    let seed: u64 = std::env::var("SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1);
+    let g = reconbench_synth::generate(&spec, seed).expect("data");
     let genus = Some(spec.shape.build().expect("shape").info().genus);
     let cloud = PointCloud::new(g.positions).expect("finite");
     // Extra parameters as JSON in UFM_PARAMS, e.g. '{"lock_matched": false}'.

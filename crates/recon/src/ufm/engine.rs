@@ -61,18 +61,6 @@ impl Complex {
     }
 }
 
-/// `diam(t) = 2R` of every facet (+∞ for a degenerate one), in parallel.
-fn diameters(dt: &Delaunay) -> Vec<f64> {
-    let pts = dt.vertices();
-    dt.facets()
-        .par_iter()
-        .map(|f| {
-            let [a, b, c] = f.v.map(|x| pts[x as usize]);
-            circum_diameter(a, b, c)
-        })
-        .collect()
-}
-
 /// Diameter of the circumcircle of triangle `abc`: `|ab||bc||ca| / (2 Area)`;
 /// `+∞` when the area is (numerically) zero.
 pub fn circum_diameter(a: DVec3, b: DVec3, c: DVec3) -> f64 {
@@ -85,20 +73,21 @@ pub fn circum_diameter(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     if d.is_finite() { d } else { f64::INFINITY }
 }
 
-/// Rank of every facet under (diameter in the given direction, then id).
+/// Rank of every facet under (diameter in the given direction, then id), from a
+/// parallel sort of flat `(key, id)` pairs (no indirection in the comparisons).
+/// Diameters are non-negative or `+∞`, so their IEEE bits order like the values.
 fn ranks(diam: &[f64], large_first: bool) -> Vec<u32> {
-    let mut ids: Vec<u32> = (0..diam.len() as u32).collect();
-    ids.par_sort_unstable_by(|&x, &y| {
-        let (dx, dy) = (diam[x as usize], diam[y as usize]);
-        let o = if large_first {
-            dy.total_cmp(&dx)
-        } else {
-            dx.total_cmp(&dy)
-        };
-        o.then(x.cmp(&y))
-    });
+    let mut keyed: Vec<(u64, u32)> = diam
+        .par_iter()
+        .enumerate()
+        .map(|(i, &d)| {
+            let bits = d.max(0.0).to_bits();
+            (if large_first { !bits } else { bits }, i as u32)
+        })
+        .collect();
+    keyed.par_sort_unstable();
     let mut rank = vec![0u32; diam.len()];
-    for (r, &f) in ids.iter().enumerate() {
+    for (r, &(_, f)) in keyed.iter().enumerate() {
         rank[f as usize] = r as u32;
     }
     rank
@@ -106,7 +95,7 @@ fn ranks(diam: &[f64], large_first: bool) -> Vec<u32> {
 
 impl Complex {
     /// Step 1 after the triangulation: CSR of `DT_v`, slots, diameters, ranks, Gabriel
-    /// flags (all in parallel where it pays).
+    /// flags, all in parallel (per vertex for the CSR, per facet for the rest).
     pub fn new(dt: Delaunay, size_order: SizeOrder) -> Result<Self, MethodError> {
         let nv = dt.n_vertices();
         let facets = dt.facets();
@@ -116,35 +105,57 @@ impl Complex {
                 facets.len()
             )));
         }
+        // CSR of DT_v: row lengths in parallel, prefix sum, then one parallel copy per
+        // vertex block into disjoint ranges.
+        let lens: Vec<u32> = (0..nv as u32)
+            .into_par_iter()
+            .map(|v| dt.facets_of_vertex(v).len() as u32)
+            .collect();
         let mut off = Vec::with_capacity(nv + 1);
         off.push(0u32);
-        for v in 0..nv {
-            let n = dt.facets_of_vertex(v as u32).len() as u32;
-            off.push(off[v] + n);
+        let mut acc = 0u32;
+        for &n in &lens {
+            acc += n;
+            off.push(acc);
         }
-        let mut items = Vec::with_capacity(off[nv] as usize);
-        for v in 0..nv {
-            items.extend_from_slice(dt.facets_of_vertex(v as u32));
-        }
-        let mut slot = vec![[0u32; 3]; facets.len()];
-        for v in 0..nv {
-            for s in off[v]..off[v + 1] {
-                let f = items[s as usize] as usize;
-                let k = facets[f]
-                    .v
-                    .iter()
-                    .position(|&x| x as usize == v)
-                    .expect("facet contains its vertex");
-                slot[f][k] = s;
+        let mut items = vec![0u32; acc as usize];
+        {
+            let mut parts: Vec<(usize, &mut [u32])> = Vec::with_capacity(nv);
+            let mut rest = items.as_mut_slice();
+            for v in 0..nv {
+                let (a, b) = rest.split_at_mut(lens[v] as usize);
+                parts.push((v, a));
+                rest = b;
             }
+            parts
+                .into_par_iter()
+                .with_min_len(256)
+                .for_each(|(v, dst)| dst.copy_from_slice(dt.facets_of_vertex(v as u32)));
         }
-        let diam = diameters(&dt);
+        // Per facet, in parallel: the CSR slots of its three corners (binary search in
+        // the increasing rows), the diameter and the exact Gabriel flag.
+        let pts = dt.vertices();
+        type PerFacet = (Vec<[u32; 3]>, (Vec<f64>, Vec<bool>));
+        let (slot, (diam, gabriel)): PerFacet = (0..facets.len())
+            .into_par_iter()
+            .map(|f| {
+                let fv = facets[f].v;
+                let slot = fv.map(|x| {
+                    let (a, b) = (off[x as usize] as usize, off[x as usize + 1] as usize);
+                    let k = items[a..b]
+                        .binary_search(&(f as u32))
+                        .expect("facet is in the rows of its vertices");
+                    (a + k) as u32
+                });
+                let [a, b, c] = fv.map(|x| pts[x as usize]);
+                (slot, (circum_diameter(a, b, c), dt.is_gabriel(f as u32)))
+            })
+            .unzip();
         let rank_init = ranks(&diam, true);
         let rank_update = match size_order {
             SizeOrder::LargeFirst => rank_init.clone(),
             SizeOrder::SmallFirst => ranks(&diam, false),
         };
-        let gabriel = dt.gabriel_flags();
         Ok(Self {
             dt,
             off,
@@ -171,6 +182,9 @@ pub struct Counters {
     /// Builds that failed even on all of `DT_v` without locks (expected 0; the vertex
     /// keeps its previous umbrella).
     pub build_failures: u64,
+    /// Fold repairs: rebuilds after demoting the most folded facet (deviation,
+    /// `max_fold`).
+    pub fold_repairs: u64,
 }
 
 impl std::ops::Add for Counters {
@@ -182,6 +196,7 @@ impl std::ops::Add for Counters {
             skipped_cascades: self.skipped_cascades + o.skipped_cascades,
             dropped_cycles: self.dropped_cycles + o.dropped_cycles,
             build_failures: self.build_failures + o.build_failures,
+            fold_repairs: self.fold_repairs + o.fold_repairs,
         }
     }
 }
@@ -194,12 +209,111 @@ pub struct Scratch {
     keys: Vec<u64>,
     order: Vec<u32>,
     sub: Vec<u32>,
+    // Fold repair buffers.
+    cyc: Vec<u32>,
+    ring: Vec<u32>,
+    ang: Vec<f64>,
+    demoted: Vec<u32>,
+    order2: Vec<u32>,
+}
+
+/// Most fold repairs per rebuild.
+const MAX_FOLD_REPAIRS: usize = 3;
+
+/// The local facet of the current umbrella (`s.g.alive`) to demote because the
+/// umbrella folds back by more than `bound` radians at one of its ribs: the facet with
+/// the largest sum of over-bound fold angles at its two ribs, skipping facets already
+/// demoted; ties (the two facets of a single fold) go to the facet that comes first in
+/// the removal `order` (worse class, then larger), so the choice does not depend on
+/// vertex or facet numbering. `None` when the umbrella does not fold.
+fn most_folded(s: &mut Scratch, pts: &[DVec3], v: u32, bound: f64, order: &[u32]) -> Option<u32> {
+    let Scratch {
+        g,
+        cyc,
+        ring,
+        ang,
+        demoted,
+        ..
+    } = s;
+    g.cycle(|i| g.alive[i], cyc, ring);
+    super::geometry::fold_angles(pts, v, ring, ang);
+    let k = cyc.len();
+    if k == 0 || ang.iter().all(|&a| a <= bound) {
+        return None;
+    }
+    let pos = |f: u32| order.iter().position(|&x| x == f).unwrap_or(usize::MAX);
+    // ang[j] is at the rib between facets j and j + 1.
+    let over = |a: f64| if a > bound { a } else { 0.0 };
+    (0..k)
+        .filter(|&j| !demoted.contains(&cyc[j]))
+        .map(|j| (over(ang[(j + k - 1) % k]) + over(ang[j]), cyc[j]))
+        .filter(|&(sc, _)| sc > 0.0)
+        .max_by(|a, b| a.0.total_cmp(&b.0).then(pos(b.1).cmp(&pos(a.1))))
+        .map(|(_, f)| f)
+}
+
+/// BuildUmbrella with the optional lock (and the line-12 fallback without it), then
+/// the fold repair when `bound > 0`: while the umbrella folds back, its most folded
+/// facet is moved to the front of the queue and unlocked, and the cluster rebuilt.
+fn build_checked(
+    s: &mut Scratch,
+    pts: &[DVec3],
+    v: u32,
+    locked: Option<&(dyn Fn(usize) -> bool + '_)>,
+    bound: f64,
+    c: &mut Counters,
+) -> Result<super::umbrella::BuildInfo, super::umbrella::BuildFail> {
+    let order = std::mem::take(&mut s.order);
+    let mut res = s.g.build(|_| true, &order, locked);
+    if res.is_err() && locked.is_some() {
+        // Line 12: rebuild once without protection.
+        c.lock_fallbacks += 1;
+        res = s.g.build(|_| true, &order, None);
+    }
+    s.demoted.clear();
+    if bound > 0.0 && res.is_ok() {
+        for _ in 0..MAX_FOLD_REPAIRS {
+            let Some(f) = most_folded(s, pts, v, bound, &order) else {
+                break;
+            };
+            s.demoted.push(f);
+            c.fold_repairs += 1;
+            let Scratch {
+                g, demoted, order2, ..
+            } = &mut *s;
+            order2.clear();
+            order2.extend_from_slice(demoted);
+            order2.extend(order.iter().filter(|x| !demoted.contains(x)));
+            let lk = |i: usize| locked.is_some_and(|l| l(i)) && !demoted.contains(&(i as u32));
+            let mut r = g.build(
+                |_| true,
+                order2,
+                locked.map(|_| &lk as &dyn Fn(usize) -> bool),
+            );
+            if r.is_err() && locked.is_some() {
+                c.lock_fallbacks += 1;
+                r = g.build(|_| true, order2, None);
+            }
+            if r.is_err() {
+                // Keep the last valid umbrella (rebuild it).
+                res = g.build(|_| true, &order, None);
+                break;
+            }
+            res = r;
+        }
+    }
+    s.order = order;
+    res
 }
 
 /// Which queue a rebuild uses.
 enum Mode<'a> {
     /// Step 2: initial umbrella.
-    Init { start: Init },
+    Init {
+        start: Init,
+        /// Fold bound in radians (0 = no fold repair).
+        fold: f64,
+    },
     /// Step 3: update from the current state.
     Update {
         m: &'a [u8],
@@ -208,6 +322,8 @@ enum Mode<'a> {
         /// Stagnation escape (non-faithful extension): ignore the membership bit, so
         /// the middle level collapses and ties of `M_f` go to the global size order.
         ignore_member: bool,
+        /// Fold bound in radians (0 = no fold repair).
+        fold: f64,
     },
 }
 
@@ -234,8 +350,9 @@ fn rebuild_vertex(
     let row = cx.row(v);
     let base = cx.off[v] as usize;
     let n = row.len();
+    let pts = cx.dt.vertices();
     match *mode {
-        Mode::Init { start } => {
+        Mode::Init { start, fold } => {
             // Step 2.1 / 2.3: start from GT_v. The link graph is built over GT_v only
             // (the same graph as DT_v restricted to C, without the isolated rest).
             if start == Init::Gabriel {
@@ -252,9 +369,7 @@ fn rebuild_vertex(
                 sort_order(s, sub.len(), |j| {
                     (cx.rank_init[row[sub[j] as usize] as usize] as u64) << 29
                 });
-                let order = std::mem::take(&mut s.order);
-                let res = s.g.build(|_| true, &order, None);
-                s.order = order;
+                let res = build_checked(s, pts, v as u32, None, fold, &mut c);
                 if let Ok(i) = res {
                     c.dropped_cycles += i.dropped_cycles as u64;
                     out.fill(false);
@@ -270,10 +385,7 @@ fn rebuild_vertex(
             }
             cx.prepare(v, &mut s.g);
             sort_order(s, n, |i| (cx.rank_init[row[i] as usize] as u64) << 29);
-            let order = std::mem::take(&mut s.order);
-            let res = s.g.build(|_| true, &order, None);
-            s.order = order;
-            match res {
+            match build_checked(s, pts, v as u32, None, fold, &mut c) {
                 Ok(i) => c.dropped_cycles += i.dropped_cycles as u64,
                 Err(_) => {
                     c.build_failures += 1;
@@ -287,6 +399,7 @@ fn rebuild_vertex(
             inu,
             lock,
             ignore_member,
+            fold,
         } => {
             cx.prepare(v, &mut s.g);
             // Line 9: key_v(t) = (class_v(t), size rank, id).
@@ -295,22 +408,11 @@ fn rebuild_vertex(
                 let cl = class(m[f], ignore_member || inu[base + i]) as u64;
                 (cl << 61) | ((cx.rank_update[f] as u64) << 29)
             });
-            let order = std::mem::take(&mut s.order);
             // Line 10 (ASSUMPTION A-09): lock the (3) facets.
             let any_locked = lock && row.iter().any(|&f| m[f as usize] == 3);
             let locked = |i: usize| m[row[i] as usize] == 3;
-            let mut res = if any_locked {
-                s.g.build(|_| true, &order, Some(&locked))
-            } else {
-                s.g.build(|_| true, &order, None)
-            };
-            if res.is_err() && any_locked {
-                // Line 12: rebuild once without protection.
-                c.lock_fallbacks += 1;
-                res = s.g.build(|_| true, &order, None);
-            }
-            s.order = order;
-            match res {
+            let lk: Option<&dyn Fn(usize) -> bool> = if any_locked { Some(&locked) } else { None };
+            match build_checked(s, pts, v as u32, lk, fold, &mut c) {
                 Ok(i) => {
                     c.dropped_cycles += i.dropped_cycles as u64;
                     c.skipped_cascades += i.skipped_cascades as u64;
@@ -325,6 +427,27 @@ fn rebuild_vertex(
     }
     out.copy_from_slice(&s.g.alive[..n]);
     c
+}
+
+/// Whether the current umbrella of `v` (membership flags `inu`) folds back by more
+/// than `bound` radians at some rib (see [`super::geometry`]).
+pub fn umbrella_folds(cx: &Complex, inu: &[bool], v: usize, bound: f64) -> bool {
+    let base = cx.off[v] as usize;
+    let facets = cx.facets();
+    let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(16);
+    for (i, &f) in cx.row(v).iter().enumerate() {
+        if inu[base + i] {
+            let t = facets[f as usize].v;
+            let o: Vec<u32> = t.iter().copied().filter(|&x| x as usize != v).collect();
+            pairs.push((o[0], o[1]));
+        }
+    }
+    let mut ring = Vec::with_capacity(16);
+    if !super::geometry::ring_from_pairs(&pairs, &mut ring) {
+        return false;
+    }
+    let mut buf = Vec::with_capacity(16);
+    super::geometry::max_fold(cx.dt.vertices(), v as u32, &ring, &mut buf) > bound
 }
 
 /// `M_t` for every facet from the membership flags (Step 3.1).
@@ -452,7 +575,16 @@ pub fn run(cx: Complex, p: &UfmParams, ctx: &RunCtx) -> Result<UfmState, MethodE
     let t0 = std::time::Instant::now();
     let nslots = cx.items.len();
     let mut inu = vec![false; nslots];
-    let mut counters = rebuild_all(&cx, &mut inu, &Mode::Init { start: p.init }, None, None);
+    let mut counters = rebuild_all(
+        &cx,
+        &mut inu,
+        &Mode::Init {
+            start: p.init,
+            fold: p.max_fold.to_radians(),
+        },
+        None,
+        None,
+    );
     let init_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     let mut m = Vec::new();
@@ -486,8 +618,14 @@ pub fn run(cx: Complex, p: &UfmParams, ctx: &RunCtx) -> Result<UfmState, MethodE
                     inu: &inu,
                     lock: p.lock_matched,
                     ignore_member: escape,
+                    fold: p.max_fold.to_radians(),
                 };
-                let frozen = |v: usize| fully_matched(&cx, &inu, &m, v);
+                // A-08, and with the fold repair: a folded umbrella is not frozen.
+                let bound = p.max_fold.to_radians();
+                let frozen = |v: usize| {
+                    fully_matched(&cx, &inu, &m, v)
+                        && (bound <= 0.0 || !umbrella_folds(&cx, &inu, v, bound))
+                };
                 let skip: Option<&(dyn Fn(usize) -> bool + Sync)> =
                     if p.freeze_full { Some(&frozen) } else { None };
                 counters = counters + rebuild_all(&cx, &mut next, &mode, skip, Some(&inu));
@@ -526,8 +664,12 @@ fn gauss_seidel_sweep(
     let mut s = Scratch::default();
     let mut out = Vec::new();
     let mut c = Counters::default();
+    let bound = p.max_fold.to_radians();
     for v in 0..cx.n_vertices() {
-        if p.freeze_full && fully_matched(cx, inu, m, v) {
+        if p.freeze_full
+            && fully_matched(cx, inu, m, v)
+            && (bound <= 0.0 || !umbrella_folds(cx, inu, v, bound))
+        {
             continue;
         }
         let row = cx.row(v);
@@ -539,6 +681,7 @@ fn gauss_seidel_sweep(
             inu,
             lock: p.lock_matched,
             ignore_member,
+            fold: bound,
         };
         c = c + rebuild_vertex(cx, v, &mut s, &mode, &mut out);
         for (i, &f) in row.iter().enumerate() {
@@ -565,6 +708,7 @@ pub fn rebuild_one(cx: &Complex, v: usize, inu: &[bool], m: &[u8], lock: bool) -
         inu,
         lock,
         ignore_member: false,
+        fold: 0.0,
     };
     rebuild_vertex(cx, v, &mut s, &mode, &mut out);
     out

@@ -16,6 +16,7 @@
 //! See `docs/methods/ufm.md`.
 
 pub mod engine;
+pub mod geometry;
 pub mod matching;
 pub mod normals;
 pub mod params;
@@ -146,7 +147,7 @@ fn assumption_flags(p: &UfmParams) -> String {
     format!(
         "A-01=exact-dedup A-02=facet-id A-03=open-ball A-04=skip+rebuild A-05=max-min-key \
          A-06={:?} A-07=converged/fixed/cycle{}/patience:{}/max:{} A-08=freeze:{} \
-         A-09=lock:{} A-11={:?} init={:?} update={:?}",
+         A-09=lock:{} A-11={:?} init={:?} update={:?} escapes={} max_fold={} reorder={}",
         p.size_order,
         matching::CYCLE_MEMORY,
         p.patience,
@@ -155,7 +156,10 @@ fn assumption_flags(p: &UfmParams) -> String {
         p.lock_matched,
         p.output,
         p.init,
-        p.update
+        p.update,
+        p.escapes,
+        p.max_fold,
+        p.reorder
     )
 }
 
@@ -179,7 +183,23 @@ impl Reconstructor for Ufm {
             )));
         }
         let t_start = Instant::now();
-        let st = run_ufm(input, p, ctx)?;
+        // Memory locality (`reorder`): run on the points in Morton order, so that
+        // vertex ids, facet ids and every per-vertex array follow space; `perm[k]` is
+        // the input index of the k-th point. Ties of the Morton code keep input order,
+        // so the first of exact duplicates stays the representative (A-01).
+        let perm: Option<Vec<u32>> = p
+            .reorder
+            .then(|| reconbench_geom::spatial::morton_order(input));
+        let permuted: Vec<DVec3>;
+        let run_pts = match &perm {
+            Some(perm) => {
+                permuted = perm.iter().map(|&i| input[i as usize]).collect();
+                &permuted[..]
+            }
+            None => input,
+        };
+        let to_input = |k: u32| perm.as_ref().map_or(k, |p| p[k as usize]);
+        let st = run_ufm(run_pts, p, ctx)?;
         let dt_s = ctx.timer.seconds("delaunay");
         let t_out = Instant::now();
         let dt = &st.cx.dt;
@@ -188,13 +208,19 @@ impl Reconstructor for Ufm {
         let out = output_facets(&st, p.output);
         let faces: Vec<[u32; 3]> = out
             .iter()
-            .map(|&f| facets[f as usize].v.map(|v| dt.input_of_vertex(v)))
+            .map(|&f| {
+                facets[f as usize]
+                    .v
+                    .map(|v| to_input(dt.input_of_vertex(v)))
+            })
             .collect();
         // Every input point is a vertex (interpolation); exact duplicates (A-01) are
         // unreferenced and listed as refused.
-        let refused: Vec<u32> = (0..n as u32)
-            .filter(|&i| dt.input_of_vertex(dt.vertex_of_input(i as usize)) != i)
+        let mut refused: Vec<u32> = (0..n as u32)
+            .filter(|&k| dt.input_of_vertex(dt.vertex_of_input(k as usize)) != k)
+            .map(to_input)
             .collect();
+        refused.sort_unstable();
         let mut mesh = TriMesh::new(input.to_vec(), faces)?;
         orient_outward(&mut mesh)?;
         let topo = MeshTopology::new(&mesh);
@@ -236,6 +262,8 @@ impl Reconstructor for Ufm {
         num(&mut d, "skipped_cascades", c.skipped_cascades as f64);
         num(&mut d, "dropped_cycles", c.dropped_cycles as f64);
         num(&mut d, "build_failures", c.build_failures as f64);
+        num(&mut d, "fold_repairs", c.fold_repairs as f64);
+        num(&mut d, "escapes_used", st.escapes as f64);
         num(&mut d, "pinched_vertices", rep.non_manifold_vertices as f64);
         num(&mut d, "non_manifold_edges", rep.non_manifold_edges as f64);
         num(&mut d, "boundary_edges", rep.boundary_edges as f64);
