@@ -21,6 +21,7 @@ use crate::geom2d::{Elem2, Region2, loops};
 use crate::shape::{FeatureCurve, Sample, Shape, ShapeInfo, SurfacePoint};
 use crate::spec::{fmt_f64, format_kv, parse_f64, parse_kv, resolve_params};
 
+pub mod blind_hole;
 pub mod boxes;
 pub mod ellipsoid;
 pub mod knot;
@@ -516,6 +517,25 @@ static DEFS: &[ShapeDef] = &[
             let g = prism::Prism::new(cube_with_hole_region(rh), -1.0, 1.0)
                 .map_err(|m| p.error("rh", m))?;
             Ok(boxed("cube-with-hole", g))
+        },
+    },
+    ShapeDef {
+        name: "cube-with-blind-hole",
+        summary: "cube of side 2 with a cylindrical blind hole of radius rh and depth d from the top face (genus 0; seed 002 §10.2: rh = 0.5, d = 1)",
+        params: &[("rh", 0.5), ("d", 1.0)],
+        build: |p| {
+            let rh = p.positive("rh")?;
+            if rh >= 0.95 {
+                return Err(p.error("rh", format!("{rh} must be < 0.95")));
+            }
+            let d = p.positive("d")?;
+            if d > 1.9 {
+                return Err(p.error("d", format!("{d} must be <= 1.9")));
+            }
+            Ok(boxed(
+                "cube-with-blind-hole",
+                blind_hole::BlindHoleCube::new(rh, d),
+            ))
         },
     },
     ShapeDef {
