@@ -26,6 +26,7 @@ pub mod boxes;
 pub mod ellipsoid;
 pub mod knot;
 pub mod mesh_shape;
+pub mod planes;
 pub mod prism;
 pub mod revolved;
 pub mod sheet;
@@ -445,6 +446,22 @@ static DEFS: &[ShapeDef] = &[
                 "wedge",
                 sheet::Wedge::new(
                     p.in_range("angle", 1.0, 179.0)?,
+                    p.positive("l")?,
+                    p.positive("w")?,
+                ),
+            ))
+        },
+    },
+    ShapeDef {
+        name: "planes",
+        summary: "open surface: two ruled sheets (l x w) meeting at a straight ridge whose opening angle varies from a0 to a1 (deg; seed 002's 45 -> 140 planes)",
+        params: &[("a0", 45.0), ("a1", 140.0), ("l", 2.0), ("w", 1.0)],
+        build: |p| {
+            Ok(boxed(
+                "planes",
+                planes::Planes::new(
+                    p.in_range("a0", 1.0, 179.0)?,
+                    p.in_range("a1", 1.0, 179.0)?,
                     p.positive("l")?,
                     p.positive("w")?,
                 ),
