@@ -78,3 +78,36 @@ fn grid_samples_lie_on_every_feature_curve() {
     }
     assert_eq!(sh.grid_dims_for_count(g.len()), (n, n));
 }
+
+#[test]
+fn half_smooth_star_has_sharp_tips_and_smooth_inner_walls() {
+    // star-half: the k tips are vertical sharp edges (at radius 1), the filleted inner
+    // corners are tangent (no vertical feature), the two cap rims are 90-degree loops.
+    for k in [4usize, 5, 7] {
+        let s = from_spec(&format!("star-half:k={k}")).unwrap();
+        let curves = s.feature_curves();
+        let vertical: Vec<_> = curves
+            .iter()
+            .filter(|c| {
+                !c.is_corner
+                    && c.points.len() == 2
+                    && (c.points[0].truncate() - c.points[1].truncate()).length() < 1e-12
+            })
+            .collect();
+        assert_eq!(vertical.len(), k, "k = {k}");
+        let tip_r = vertical[0].points[0].truncate().length();
+        for v in &vertical {
+            assert!((v.points[0].truncate().length() - tip_r).abs() < 1e-12);
+            assert!(v.dihedral_deg < 90.0, "tips are acute: {}", v.dihedral_deg);
+        }
+        // A point on the middle of a filleted inner wall is smooth: far from features
+        // compared with the sampling scale.
+        let g = s.sample_uniform(4000, &mut ChaCha8Rng::seed_from_u64(k as u64));
+        let smooth = g
+            .iter()
+            .filter(|x| x.normal.z.abs() < 1e-9 && s.feature_distance(x.position) > 0.02)
+            .count();
+        assert!(smooth > 100, "k = {k}: {smooth}");
+        assert_eq!(s.genus(), 0);
+    }
+}

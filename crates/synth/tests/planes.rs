@@ -21,8 +21,8 @@ fn opening_angle_varies_from_45_to_140_degrees() {
     assert_eq!(f.len(), 32);
     let angles: Vec<f64> = f.iter().map(|c| c.dihedral_deg).collect();
     assert!(angles.windows(2).all(|w| w[1] > w[0]), "{angles:?}");
-    assert!(angles[0] > 45.0 && angles[0] < 50.0, "{}", angles[0]);
-    assert!(angles[31] < 140.0 && angles[31] > 135.0, "{}", angles[31]);
+    assert!((angles[0] - 45.0).abs() < 1e-9, "{}", angles[0]);
+    assert!(angles[31] < 140.0 && angles[31] > 130.0, "{}", angles[31]);
     // At the end rulings the angle between the two sheets' normals is 180 minus the
     // opening angle: normals of the first sample row (s = w / 2000, negligible twist).
     let (nu, nv) = (41, 2001);

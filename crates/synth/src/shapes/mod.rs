@@ -581,6 +581,21 @@ static DEFS: &[ShapeDef] = &[
         },
     },
     ShapeDef {
+        name: "star-half",
+        summary: "half-smooth star: extruded star (k tips, inner radius ri, thickness h) with sharp tips and rims and inner corners filleted by radius f (smooth walls)",
+        params: &[("k", 5.0), ("ri", 0.5), ("h", 0.4), ("f", 0.15)],
+        build: |p| {
+            let region = star_smooth_region(
+                p.count("k", 3)?,
+                p.in_range("ri", 0.05, 0.95)?,
+                p.positive("f")?,
+            );
+            let h = p.positive("h")?;
+            let g = prism::Prism::new(region, -0.5 * h, 0.5 * h).map_err(|m| p.error("f", m))?;
+            Ok(boxed("star-half", g))
+        },
+    },
+    ShapeDef {
         name: "fandisk-like",
         summary: "CAD part: extruded profile with planar faces, a concave cylindrical cut and a 30-deg spike; dihedral angles 30-150",
         params: &[("depth", 1.0)],

@@ -11,9 +11,9 @@
 //! smooth 1-D function: 129 samples, then golden-section refinement of the bracket of
 //! every sampled local minimum to machine precision (the global minimum is kept).
 //!
-//! Feature: the ridge, reported as 32 equal segments, each with the dihedral angle at its
-//! mid-point (the angle between `d` and its mirror; the geometry is exact, the per-piece
-//! angle is a sampling of the continuous variation). Normals: sheet A `(0, cos, sin)`-like
+//! Feature: the ridge, reported as 32 equal segments, each with the smallest dihedral
+//! angle over the piece (the angle between `d` and its mirror, monotonic along the
+//! ridge; the geometry is exact, the per-piece angle samples the continuous variation). Normals: sheet A `(0, cos, sin)`-like
 //! (as `wedge`), sheet B its mirror; ridge grid samples get the normalised sum.
 
 use glam::{DVec2, DVec3};
@@ -266,7 +266,7 @@ impl Geometry for Planes {
                         a: self.point(0, t0, 0.0),
                         b: self.point(0, t1, 0.0),
                     },
-                    dihedral_deg: self.angle_deg(0.5 * (t0 + t1)),
+                    dihedral_deg: self.angle_deg(t0).min(self.angle_deg(t1)),
                 }
             })
             .collect()
