@@ -54,7 +54,7 @@ impl BlindHoleCube {
     /// Closest point of face `f` (axis `f / 2`, side `+-1`), the top face minus the disk.
     fn face_closest(&self, p: DVec3, f: usize) -> (DVec3, DVec3) {
         let axis = f / 2;
-        let s = if f % 2 == 0 { -1.0 } else { 1.0 };
+        let s = if f.is_multiple_of(2) { -1.0 } else { 1.0 };
         let mut q = p.clamp(DVec3::NEG_ONE, DVec3::ONE);
         q[axis] = s;
         if f == 5 {
@@ -126,7 +126,7 @@ impl Geometry for BlindHoleCube {
                     uniform(rng, -1.0, 1.0),
                 );
                 let axis = k / 2;
-                let s = if k % 2 == 0 { -1.0 } else { 1.0 };
+                let s = if k.is_multiple_of(2) { -1.0 } else { 1.0 };
                 p[axis] = s;
                 if k == 5 && p.x * p.x + p.y * p.y < self.r * self.r {
                     continue; // rejection: the top face minus the disk
