@@ -57,8 +57,9 @@ pub struct GaussMapAdaptiveParams {
     pub sigma_max: f64,
     /// Floor of k; thesis 8.
     pub k_min: usize,
-    /// ASSUMPTION W-11: false (default) clamps k at `k_min` and lets `sigma_max` end the
-    /// loop; true ends the loop when k would drop below `k_min`.
+    /// ASSUMPTION W-11: true (default) ends the loop when k would drop below `k_min`
+    /// (the thesis lists "a minimal size for the neighborhood (k = 8)" among the break
+    /// conditions, §3.6); false clamps k at `k_min` and lets `sigma_max` end the loop.
     pub kmin_is_break: bool,
     /// ASSUMPTION W-12: most refinement steps per candidate (30).
     pub max_inner: usize,
@@ -104,7 +105,10 @@ impl Default for GaussMapAdaptiveParams {
             stop_share: 0.30,
             sigma_max: 1.2,
             k_min: 8,
-            kmin_is_break: false,
+            // ASSUMPTION W-11: k_min is a break condition (seed 002 thesis §3.6). With
+            // the clamp reading (false) sigma climbs to 1.2 and merges the sheets of
+            // ridges below ~70 degrees (angle sweep, docs/methods/features.md).
+            kmin_is_break: true,
             max_inner: 30,
             max_outer: 10,
             isolated_rule: true,
@@ -168,8 +172,9 @@ impl GaussMapAdaptiveParams {
     }
 
     /// The refinement schedule: `(k, sigma)` of steps 1, 2, ... (seed 002 §4.3 lines
-    /// 11-12): sigma *= growth and k -= k_step (clamped at `k_min`, ASSUMPTION W-11) until
-    /// sigma exceeds `sigma_max` or `max_inner` steps.
+    /// 11-12): sigma *= growth and k -= k_step until k would drop below `k_min` (or, with
+    /// `kmin_is_break = false`, clamped there; ASSUMPTION W-11), sigma exceeds
+    /// `sigma_max` or `max_inner` steps.
     pub fn schedule(&self, k0_eff: usize) -> Vec<(usize, f64)> {
         let mut out = Vec::new();
         let (mut k, mut sigma) = (k0_eff, self.sigma0);

@@ -13,7 +13,8 @@ use reconbench_geom::method::{FeatureClass, FeatureDetector, RunCtx};
 use reconbench_geom::spatial::PointIndex;
 
 /// Seed 002 §4.3 steps 1-19, line by line, with the defaults' assumptions (W-10 fixed
-/// counting neighbourhood, W-11 clamp, W-13 isolated rule on the refined set at once).
+/// counting neighbourhood, W-11 k_min as a break condition or clamp, W-13 isolated rule
+/// on the refined set at once).
 fn literal_adaptive(points: &[DVec3], p: &GaussMapAdaptiveParams) -> Vec<bool> {
     let n = points.len();
     let table = PointIndex::new(points)
@@ -41,6 +42,9 @@ fn literal_adaptive(points: &[DVec3], p: &GaussMapAdaptiveParams) -> Vec<bool> {
             let mut step = 0;
             while m.iter().filter(|&&q| cand[q]).count() >= thr {
                 sigma *= p.sigma_growth;
+                if p.kmin_is_break && p.k_step > 0 && k < p.k_min + p.k_step {
+                    break; // "a minimal size for the neighborhood (k = 8)"
+                }
                 k = (k - p.k_step).max(p.k_min);
                 if sigma > p.sigma_max || step >= p.max_inner {
                     break;
@@ -100,8 +104,15 @@ fn optimised_refinement_equals_the_literal_pseudo_code() {
     // curved cloud (almost everything is a first-pass candidate).
     let t = common::random_box(1.0, 1200, 21);
     let noisy = common::add_noise(&t.points, 0.004, 3);
-    for (name, pts) in [("noisy box", noisy), ("coarse torus", coarse_torus(700))] {
-        let p = GaussMapAdaptiveParams::default();
+    for (name, pts, kmin_is_break) in [
+        ("noisy box", noisy.clone(), true),
+        ("coarse torus", coarse_torus(700), true),
+        ("noisy box, k clamp", noisy, false),
+    ] {
+        let p = GaussMapAdaptiveParams {
+            kmin_is_break,
+            ..Default::default()
+        };
         let want = literal_adaptive(&pts, &p);
         let got = GaussMapAdaptive::new(p)
             .detect(&PointCloud::new(pts.clone()).unwrap(), &mut RunCtx::new(1))
@@ -125,9 +136,12 @@ fn isolated_rule_does_not_erase_open_lines() {
     // Applied with immediate effect in index order the rule would eat the ridge from
     // its ends (measured: 6 of 41 points left); on the refined set at once it keeps it.
     let t = common::wedge(140.0, 2.0, 1.0, 0.05);
+    // With k0 = k_min = 8 the default W-11 reading (k_min is a break) runs no
+    // refinement step; the clamp reading refines, which is where the cascade showed.
     let p = GaussMapAdaptiveParams {
         k0: 8,
         k_min: 8,
+        kmin_is_break: false,
         ..Default::default()
     };
     let out = GaussMapAdaptive::new(p.clone())
@@ -179,4 +193,27 @@ fn valence_four_apex_is_a_corner() {
         "{:?}",
         spec.scores.as_ref().map(|s| s[apex])
     );
+}
+
+#[test]
+fn acute_ridge_survives_with_kmin_as_break() {
+    // Seed 002 §3.7.1: at 45 degrees "the overrated points don't disappear", i.e. the
+    // ridge is found with extra points. With k_min as a break (default, W-11) sigma stops
+    // at 0.1 * 1.1^12 = 0.31 < the 0.785 rad between the sheets' normal lines, so the
+    // ridge keeps its two clusters; with the clamp sigma climbs to 1.19 and the ridge is
+    // removed.
+    let t = common::wedge(45.0, 2.0, 1.0, 0.05);
+    let run = |kmin_is_break: bool| {
+        let out = GaussMapAdaptive::new(GaussMapAdaptiveParams {
+            kmin_is_break,
+            ..Default::default()
+        })
+        .detect(&t.cloud(), &mut RunCtx::new(1))
+        .unwrap();
+        common::score(&t, &out.labels, 0.5 * t.spacing)
+    };
+    let brk = run(true);
+    assert!(brk.recall_on_curve >= 0.95, "{brk:?}");
+    let clamp = run(false);
+    assert!(clamp.recall_on_curve <= 0.2, "{clamp:?}");
 }

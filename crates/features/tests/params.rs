@@ -56,19 +56,26 @@ fn unknown_fields_are_rejected_and_missing_fields_default() {
 
 #[test]
 fn adaptive_schedule_follows_the_thesis() {
+    // Default (ASSUMPTION W-11, k_min a break condition): k 19, 18, ..., 8 = 12 steps,
+    // sigma 0.1 * 1.1^s.
     let a = GaussMapAdaptiveParams::default();
+    assert!(a.kmin_is_break);
     let s = a.schedule(20);
-    // sigma0 * 1.1^26 = 1.19 <= 1.2 < 1.1^27 * 0.1: 26 steps, k clamped at 8.
-    assert_eq!(s.len(), 26);
+    assert_eq!(s.len(), 12);
     assert_eq!(s[0].0, 19);
     assert!((s[0].1 - 0.11).abs() < 1e-12);
     assert_eq!(s[11].0, 8);
-    assert_eq!(s[25].0, 8);
+    assert!((s[11].1 - 0.1 * 1.1f64.powi(12)).abs() < 1e-12);
+    // k0 = k_min: no refinement step at all.
+    assert!(a.schedule(8).is_empty());
+    // Clamp reading: sigma0 * 1.1^26 = 1.19 <= 1.2 < 1.1^27 * 0.1: 26 steps, k clamped
+    // at 8.
     let b = GaussMapAdaptiveParams {
-        kmin_is_break: true,
+        kmin_is_break: false,
         ..Default::default()
     };
     let s = b.schedule(20);
-    assert_eq!(s.len(), 12);
-    assert!((s[11].1 - 0.1 * 1.1f64.powi(12)).abs() < 1e-12);
+    assert_eq!(s.len(), 26);
+    assert_eq!(s[11].0, 8);
+    assert_eq!(s[25].0, 8);
 }

@@ -166,7 +166,7 @@ const GAUSS_MAP_ADAPTIVE_DOCS: &[ParamDoc] = &[
     ParamDoc {
         name: "kmin_is_break",
         unit: "",
-        doc: "ASSUMPTION W-11: end the loop (true) or clamp (false) at k_min",
+        doc: "ASSUMPTION W-11: end the loop (true, default: thesis break condition) or clamp (false) at k_min",
     },
     ParamDoc {
         name: "max_inner",

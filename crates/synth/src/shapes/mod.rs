@@ -21,10 +21,12 @@ use crate::geom2d::{Elem2, Region2, loops};
 use crate::shape::{FeatureCurve, Sample, Shape, ShapeInfo, SurfacePoint};
 use crate::spec::{fmt_f64, format_kv, parse_f64, parse_kv, resolve_params};
 
+pub mod blind_hole;
 pub mod boxes;
 pub mod ellipsoid;
 pub mod knot;
 pub mod mesh_shape;
+pub mod planes;
 pub mod prism;
 pub mod revolved;
 pub mod sheet;
@@ -451,6 +453,22 @@ static DEFS: &[ShapeDef] = &[
         },
     },
     ShapeDef {
+        name: "planes",
+        summary: "open surface: two ruled sheets (l x w) meeting at a straight ridge whose opening angle varies from a0 to a1 (deg; seed 002's 45 -> 140 planes)",
+        params: &[("a0", 45.0), ("a1", 140.0), ("l", 2.0), ("w", 1.0)],
+        build: |p| {
+            Ok(boxed(
+                "planes",
+                planes::Planes::new(
+                    p.in_range("a0", 1.0, 179.0)?,
+                    p.in_range("a1", 1.0, 179.0)?,
+                    p.positive("l")?,
+                    p.positive("w")?,
+                ),
+            ))
+        },
+    },
+    ShapeDef {
         name: "height-field",
         summary: "open sheet z = amp sin(freq pi x) cos(freq pi y) over [-1, 1]^2 with a boundary",
         params: &[("amp", 0.15), ("freq", 1.0)],
@@ -519,6 +537,25 @@ static DEFS: &[ShapeDef] = &[
         },
     },
     ShapeDef {
+        name: "cube-with-blind-hole",
+        summary: "cube of side 2 with a cylindrical blind hole of radius rh and depth d from the top face (genus 0; seed 002 §10.2: rh = 0.5, d = 1)",
+        params: &[("rh", 0.5), ("d", 1.0)],
+        build: |p| {
+            let rh = p.positive("rh")?;
+            if rh >= 0.95 {
+                return Err(p.error("rh", format!("{rh} must be < 0.95")));
+            }
+            let d = p.positive("d")?;
+            if d > 1.9 {
+                return Err(p.error("d", format!("{d} must be <= 1.9")));
+            }
+            Ok(boxed(
+                "cube-with-blind-hole",
+                blind_hole::BlindHoleCube::new(rh, d),
+            ))
+        },
+    },
+    ShapeDef {
         name: "star-sharp",
         summary: "extruded star with k tips (outer radius 1, inner radius ri), thickness h: sharp tips, reflex edges and rims",
         params: &[("k", 5.0), ("ri", 0.5), ("h", 0.4)],
@@ -541,6 +578,21 @@ static DEFS: &[ShapeDef] = &[
             );
             let g = slab::Slab::new(region, p.positive("r")?).map_err(|m| p.error("r", m))?;
             Ok(boxed("star-smooth", g))
+        },
+    },
+    ShapeDef {
+        name: "star-half",
+        summary: "half-smooth star: extruded star (k tips, inner radius ri, thickness h) with sharp tips and rims and inner corners filleted by radius f (smooth walls)",
+        params: &[("k", 5.0), ("ri", 0.5), ("h", 0.4), ("f", 0.15)],
+        build: |p| {
+            let region = star_smooth_region(
+                p.count("k", 3)?,
+                p.in_range("ri", 0.05, 0.95)?,
+                p.positive("f")?,
+            );
+            let h = p.positive("h")?;
+            let g = prism::Prism::new(region, -0.5 * h, 0.5 * h).map_err(|m| p.error("f", m))?;
+            Ok(boxed("star-half", g))
         },
     },
     ShapeDef {
