@@ -457,3 +457,23 @@ fn uniform_box_crease_regression() {
         "refused with I8 {on}, without {off}"
     );
 }
+
+/// KNOWN PROBLEM (issue 8, not fixed): on some inputs the 2-thread stitch leaves a thin
+/// ring slit around the tube at the far edge of a slab band (two parallel loops of ~25
+/// vertices 0.4 rho apart, edges up to 9 rho): the harness torus
+/// `torus:R=2,r=0.7`, 35,947 blue-noise points, seed 3. Sequential runs of the same
+/// input are watertight. Ignored until the stitch is fixed (heavy in debug builds).
+#[test]
+#[ignore]
+fn two_thread_stitch_closes_the_band_on_a_36k_torus() {
+    let pts = synth_cloud("torus:R=2,r=0.7", true, 35_947, 3);
+    let p = PriorityFrontParams {
+        threads: 2,
+        ..PriorityFrontParams::default()
+    };
+    let rec = run(pts, p, 0);
+    let t = analyze(&rec.mesh);
+    assert_manifold_oriented(&t);
+    assert!(t.watertight, "{t:?}");
+    assert_eq!(t.genus, Some(1), "{t:?}");
+}

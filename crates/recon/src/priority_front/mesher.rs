@@ -264,6 +264,17 @@ impl<'g> Mesher<'g> {
         }
     }
 
+    /// Clears the heap and pushes the live edges among `edges` (slab stitching).
+    pub fn push_only(&mut self, edges: &[u32]) {
+        self.heap.clear();
+        for &e in edges {
+            if self.e_alive[e as usize] {
+                let t = self.e_cost[e as usize];
+                self.push(e, t);
+            }
+        }
+    }
+
     /// Creates front edge `a -> b` whose incident triangle has unit normal `nrm`; it is
     /// not linked into a loop yet.
     fn new_edge(&mut self, a: u32, b: u32, nrm: DVec3, t: f64, push: bool) -> u32 {

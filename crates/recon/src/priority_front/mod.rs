@@ -233,7 +233,13 @@ impl Reconstructor for PriorityFront {
             end_phase(ctx, "grow", t_grow);
             let t_st = Instant::now();
             let mut m = Mesher::new(&pts, &grid, cfg, &refused0);
-            parallel::stitch_import(&mut m, &outs);
+            parallel::stitch_import(&mut m, &outs, p.stitch_one_sided);
+            // One-sided sweep of the bands (no revisits yet), then every front.
+            let passes = m.cfg.revisit_passes;
+            m.cfg.revisit_passes = 0;
+            m.grow(ctx)?;
+            m.cfg.revisit_passes = passes;
+            m.repush_all();
             m.grow(ctx)?;
             // Restarts over the whole cloud for what the slabs left.
             m.restarts(&dcfg, &mut rng, ctx)?;

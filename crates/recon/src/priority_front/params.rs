@@ -113,6 +113,9 @@ pub struct PriorityFrontParams {
     pub support_tolerance: f64,
     /// Share of the neighbours the I8 support plane must hold (default 0.5).
     pub support_share: f64,
+    /// Slab stitch (threads > 1): grow each Free band from the even-numbered slab's
+    /// front first, then all fronts (default true); false = all fronts at once.
+    pub stitch_one_sided: bool,
     /// Search radius of the I8 neighbours, in units of R (default 2; all
     /// `support_neighbours` must lie within it, so an outlier in the volume fails).
     pub support_radius: f64,
@@ -173,6 +176,7 @@ impl Default for PriorityFrontParams {
             support_tolerance: 0.25,
             support_share: 0.5,
             support_radius: 2.0,
+            stitch_one_sided: true,
             close_holes_max: 10,
             restart: true,
             restart_min_points: 10,
@@ -394,6 +398,11 @@ pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
         "support_tolerance",
         "spacing",
         "I8: distance tolerance of the support plane, in rho (0.25)",
+    ),
+    (
+        "stitch_one_sided",
+        "",
+        "threads > 1: sweep each slab band from one side first (true)",
     ),
     (
         "support_radius",
