@@ -393,3 +393,87 @@ fn diagnostics_and_phases_are_reported() {
         );
     }
 }
+
+/// A synthetic CAD-like cloud from `reconbench-synth` (`shape` spec, sampler, count).
+fn synth_cloud(shape: &str, blue_noise: bool, n: usize, seed: u64) -> Vec<DVec3> {
+    use reconbench_synth::{DatasetSpec, Density, SamplerSpec, ShapeSpec};
+    let spec = DatasetSpec {
+        shape: shape.parse::<ShapeSpec>().expect("shape spec"),
+        sampler: if blue_noise {
+            SamplerSpec::BlueNoise { oversample: 5.0 }
+        } else {
+            SamplerSpec::Uniform
+        },
+        density: Density::Count(n),
+        perturbations: Vec::new(),
+        scan: None,
+    };
+    reconbench_synth::generate(&spec, seed)
+        .expect("synthetic cloud")
+        .positions
+}
+
+/// Sharp features (issue 8 regression): clean blue-noise box (90 deg creases),
+/// fandisk-like (30-150 deg) and cube-with-hole (90 deg, genus 1) at 8,000 points give
+/// watertight meshes of the right genus with at most 2 % refused points. The I5 height
+/// cap alone (0.5 rho above the tangent plane at the edge midpoint) rejects Free points
+/// just across a crease; IMPL-CHOICE I8 (support plane through the candidate) lets them
+/// in.
+#[test]
+fn creases_are_meshed_watertight_with_few_refused_points() {
+    for (shape, genus) in [("box", 0), ("fandisk-like", 0), ("cube-with-hole", 1)] {
+        let pts = synth_cloud(shape, true, 8000, 1);
+        let rec = run(pts, PriorityFrontParams::default(), 0);
+        let t = analyze(&rec.mesh);
+        assert_manifold_oriented(&t);
+        assert!(t.watertight, "{shape}: {t:?}");
+        assert_eq!(t.components, 1, "{shape}: {t:?}");
+        assert_eq!(t.genus, Some(genus), "{shape}: {t:?}");
+        let share = rec.refused.len() as f64 / 8000.0;
+        eprintln!("{shape}: refused {} ({share:.4})", rec.refused.len());
+        assert!(share <= 0.02, "{shape}: refused share {share}");
+    }
+}
+
+/// The lead's regression case: a uniform-random 6,000-point box (seed 1). With the I5
+/// height cap alone 597 points (10 %) were refused, most of them along the creases the
+/// front could not cross; with the I8 support test at most 2 %.
+#[test]
+fn uniform_box_crease_regression() {
+    let pts = synth_cloud("box", false, 6000, 1);
+    let refused = |k: usize| {
+        let p = PriorityFrontParams {
+            support_neighbours: k,
+            ..PriorityFrontParams::default()
+        };
+        let rec = run(pts.clone(), p, 0);
+        let t = analyze(&rec.mesh);
+        assert_manifold_oriented(&t);
+        rec.refused.len()
+    };
+    let (on, off) = (refused(12), refused(0));
+    assert!(
+        on <= 120 && off > 3 * on,
+        "refused with I8 {on}, without {off}"
+    );
+}
+
+/// KNOWN PROBLEM (issue 8, not fixed): on some inputs the 2-thread stitch leaves a thin
+/// ring slit around the tube at the far edge of a slab band (two parallel loops of ~25
+/// vertices 0.4 rho apart, edges up to 9 rho): the harness torus
+/// `torus:R=2,r=0.7`, 35,947 blue-noise points, seed 3. Sequential runs of the same
+/// input are watertight. Ignored until the stitch is fixed (heavy in debug builds).
+#[test]
+#[ignore]
+fn two_thread_stitch_closes_the_band_on_a_36k_torus() {
+    let pts = synth_cloud("torus:R=2,r=0.7", true, 35_947, 3);
+    let p = PriorityFrontParams {
+        threads: 2,
+        ..PriorityFrontParams::default()
+    };
+    let rec = run(pts, p, 0);
+    let t = analyze(&rec.mesh);
+    assert_manifold_oriented(&t);
+    assert!(t.watertight, "{t:?}");
+    assert_eq!(t.genus, Some(1), "{t:?}");
+}

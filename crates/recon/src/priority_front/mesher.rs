@@ -52,6 +52,14 @@ pub(crate) struct Cfg {
     pub sin_elev: f64,
     /// Largest height of a Free candidate in units of R (IMPL-CHOICE I5).
     pub height_r: f64,
+    /// Neighbours of the support plane (IMPL-CHOICE I8); < 3 = off.
+    pub support_k: usize,
+    /// Neighbour search radius of the support test, in units of R (IMPL-CHOICE I8).
+    pub support_radius: f64,
+    /// Plane distance tolerance of the support test (absolute; IMPL-CHOICE I8).
+    pub support_tol: f64,
+    /// Share of the neighbours the support plane must hold (IMPL-CHOICE I8).
+    pub support_share: f64,
 }
 
 /// Operation counters (diagnostics).
@@ -140,6 +148,12 @@ pub(crate) struct Mesher<'g> {
     pub stats: Stats,
     /// True during the revisit passes (IMPL-CHOICE I2/I3).
     pub revisiting: bool,
+    /// Per point: IMPL-CHOICE I8 support test, 0 = not computed, 1 = pass, 2 = fail.
+    pub support: Vec<u8>,
+    /// kNN scratch of the support test.
+    pub sup_buf: Vec<(f64, u32)>,
+    /// Neighbour directions scratch of the support test.
+    pub sup_dirs: Vec<DVec3>,
 }
 
 /// Unit normal of the triangle `(p0, p1, p2)`, `n = (p1 - p0) x (p2 - p0)` normalised
@@ -192,6 +206,9 @@ impl<'g> Mesher<'g> {
             xp: Vec::new(),
             stats: Stats::default(),
             revisiting: false,
+            support: vec![0; n],
+            sup_buf: Vec::new(),
+            sup_dirs: Vec::new(),
         }
     }
 
@@ -240,6 +257,17 @@ impl<'g> Mesher<'g> {
     pub fn repush_all(&mut self) {
         self.heap.clear();
         for e in 0..self.e_a.len() as u32 {
+            if self.e_alive[e as usize] {
+                let t = self.e_cost[e as usize];
+                self.push(e, t);
+            }
+        }
+    }
+
+    /// Clears the heap and pushes the live edges among `edges` (slab stitching).
+    pub fn push_only(&mut self, edges: &[u32]) {
+        self.heap.clear();
+        for &e in edges {
             if self.e_alive[e as usize] {
                 let t = self.e_cost[e as usize];
                 self.push(e, t);

@@ -193,6 +193,10 @@ impl Reconstructor for PriorityFront {
                 p.free_elevation_max_deg.to_radians().sin()
             },
             height_r: p.free_height_max / p.k,
+            support_k: p.support_neighbours,
+            support_tol: p.support_tolerance * rho,
+            support_radius: p.support_radius,
+            support_share: p.support_share,
         };
         let dcfg = DomainCfg {
             params: p,
@@ -229,7 +233,13 @@ impl Reconstructor for PriorityFront {
             end_phase(ctx, "grow", t_grow);
             let t_st = Instant::now();
             let mut m = Mesher::new(&pts, &grid, cfg, &refused0);
-            parallel::stitch_import(&mut m, &outs);
+            parallel::stitch_import(&mut m, &outs, p.stitch_one_sided);
+            // One-sided sweep of the bands (no revisits yet), then every front.
+            let passes = m.cfg.revisit_passes;
+            m.cfg.revisit_passes = 0;
+            m.grow(ctx)?;
+            m.cfg.revisit_passes = passes;
+            m.repush_all();
             m.grow(ctx)?;
             // Restarts over the whole cloud for what the slabs left.
             m.restarts(&dcfg, &mut rng, ctx)?;
@@ -300,7 +310,7 @@ impl Reconstructor for PriorityFront {
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho cross={}R free_inside={} I6=front_inside:{} I7=close<={} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I8=support:k{},share{},tol{}rho,r{}R cross={}R free_inside={} I6=front_inside:{} I7=close<={} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -315,6 +325,10 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.restart_max_flatness,
         p.free_elevation_max_deg,
         p.free_height_max,
+        p.support_neighbours,
+        p.support_share,
+        p.support_tolerance,
+        p.support_radius,
         p.cross_radius,
         p.reject_free_inside,
         p.front_inside_check,

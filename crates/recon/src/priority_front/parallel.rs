@@ -172,11 +172,22 @@ pub(crate) fn grow_slabs(
     })
 }
 
-/// Imports slab results into `m` (the global state) and re-activates their fronts.
-pub(crate) fn stitch_import(m: &mut Mesher, outs: &[SlabOut]) {
-    for o in outs {
+/// Imports slab results into `m` (the global state) and re-activates the fronts of the
+/// even-numbered slabs only. Each Free band between two slabs is then grown from one
+/// side (the even slab's), so that front sweeps across the band and meets the other
+/// slab's front, which stays still, at the far edge of the band; the caller grows, then
+/// pushes every live edge again ([`Mesher::repush_all`]) and grows on. (When both
+/// fronts grew into the band at the same pace they met in its middle, facing each
+/// other, and the zipping failed: 36k / 100k tori kept four 80-90-vertex strips.)
+pub(crate) fn stitch_import(m: &mut Mesher, outs: &[SlabOut], one_sided: bool) {
+    let mut even = Vec::new();
+    for (k, o) in outs.iter().enumerate() {
+        let base = m.e_a.len() as u32;
         m.import(&o.tris, &o.accepted, &o.edges);
         m.stats.add(&o.stats);
+        if k % 2 == 0 || !one_sided {
+            even.extend(base..m.e_a.len() as u32);
+        }
     }
-    m.repush_all();
+    m.push_only(&even);
 }

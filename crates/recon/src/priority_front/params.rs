@@ -102,6 +102,23 @@ pub struct PriorityFrontParams {
     /// surface a single accepted point can lie when it is the only candidate left.
     /// 1000 disables it.
     pub free_height_max: f64,
+    /// Neighbours of the support test of IMPL-CHOICE I8 (not in the paper; default
+    /// 12): a Free candidate above the I5 height cap (but within the elevation bound) is
+    /// still accepted when all its this many nearest other points lie within R and a
+    /// plane through it holds at least `support_share` of them within
+    /// `support_tolerance ρ`. Points just across a crease pass (the face they lie on is
+    /// behind them); outliers do not. 0 = off (the I5 cap alone).
+    pub support_neighbours: usize,
+    /// Plane tolerance of IMPL-CHOICE I8, in units of ρ (default 0.25).
+    pub support_tolerance: f64,
+    /// Share of the neighbours the I8 support plane must hold (default 0.5).
+    pub support_share: f64,
+    /// Slab stitch (threads > 1): grow each Free band from the even-numbered slab's
+    /// front first, then all fronts (default true); false = all fronts at once.
+    pub stitch_one_sided: bool,
+    /// Search radius of the I8 neighbours, in units of R (default 2; all
+    /// `support_neighbours` must lie within it, so an outlier in the volume fails).
+    pub support_radius: f64,
     /// Close leftover front loops of at most this many vertices (all edges shorter than
     /// 2R) by ear clipping with LINK / FILL after growth (IMPL-CHOICE I7, not in the
     /// paper, which leaves them to an external hole filler; default 10). 0 = off (the
@@ -155,6 +172,11 @@ impl Default for PriorityFrontParams {
             revisit_passes: 4,
             free_elevation_max_deg: 30.0,
             free_height_max: 0.5,
+            support_neighbours: 12,
+            support_tolerance: 0.25,
+            support_share: 0.5,
+            support_radius: 2.0,
+            stitch_one_sided: true,
             close_holes_max: 10,
             restart: true,
             restart_min_points: 10,
@@ -233,6 +255,27 @@ impl PriorityFrontParams {
             return Err(bad(
                 "free_height_max",
                 format!("must be in (0, 1000], got {}", self.free_height_max),
+            ));
+        }
+        if self.support_neighbours > 1000 {
+            return Err(bad("support_neighbours", "must be <= 1000"));
+        }
+        if !(self.support_tolerance >= 0.0 && self.support_tolerance <= 1000.0) {
+            return Err(bad(
+                "support_tolerance",
+                format!("must be in [0, 1000], got {}", self.support_tolerance),
+            ));
+        }
+        if !(self.support_radius > 0.0 && self.support_radius <= 100.0) {
+            return Err(bad(
+                "support_radius",
+                format!("must be in (0, 100], got {}", self.support_radius),
+            ));
+        }
+        if !(self.support_share > 0.0 && self.support_share <= 1.0) {
+            return Err(bad(
+                "support_share",
+                format!("must be in (0, 1], got {}", self.support_share),
             ));
         }
         if self.close_holes_max > 1_000_000 {
@@ -345,6 +388,31 @@ pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
         "free_height_max",
         "spacing",
         "max height of a Free candidate above the fan tangent plane, in rho (I5: 0.5)",
+    ),
+    (
+        "support_neighbours",
+        "count",
+        "I8: neighbours of the support plane that lets a Free point above the I5 cap in (12; 0 = off)",
+    ),
+    (
+        "support_tolerance",
+        "spacing",
+        "I8: distance tolerance of the support plane, in rho (0.25)",
+    ),
+    (
+        "stitch_one_sided",
+        "",
+        "threads > 1: sweep each slab band from one side first (true)",
+    ),
+    (
+        "support_radius",
+        "",
+        "I8: neighbour search radius in units of R (2)",
+    ),
+    (
+        "support_share",
+        "",
+        "I8: share of the neighbours the support plane must hold (0.5)",
     ),
     (
         "close_holes_max",

@@ -6,8 +6,9 @@ use reconbench_geom::method::{MethodError, RunCtx};
 use super::cross::{
     crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project,
 };
+use super::density::knn;
 use super::grid::NONE;
-use super::mesher::{Cand, FREE, Mesher};
+use super::mesher::{Cand, FREE, Mesher, REFUSED};
 
 /// The operation chosen for a popped edge.
 #[derive(Debug, Clone, Copy)]
@@ -152,7 +153,7 @@ impl Mesher<'_> {
     /// Steps 2-3 for candidate `t`: the rules and the score. Returns the score and the
     /// unit normal of `(a, t, b)`, or `None` when a rule removes `t`.
     #[inline]
-    fn evaluate(&self, x: &EdgeCtx, t: u32) -> Option<(f64, DVec3)> {
+    fn evaluate(&mut self, x: &EdgeCtx, t: u32) -> Option<(f64, DVec3)> {
         let EdgeCtx {
             a,
             b,
@@ -169,13 +170,18 @@ impl Mesher<'_> {
         let mut fill = false;
         if self.state[t as usize] == FREE {
             // IMPL-CHOICE I5: a Free point may not rise more than the elevation bound
-            // above the mesh's tangent plane at o (normal: fan normals of a and b).
+            // above the mesh's tangent plane at o (normal: fan normals of a and b), nor
+            // more than the height cap, unless it lies on the plane of its own
+            // neighbourhood (IMPL-CHOICE I8: a point just across a crease).
             if self.cfg.sin_elev < 1.0 || self.cfg.height_r < 1.0 {
                 let v = pt - o;
                 let h = v.dot(nv).abs();
                 // Squared compare of h > sin_elev |v| first (no square root).
                 let se = self.cfg.sin_elev;
-                if h > self.cfg.height_r * self.cfg.r || h * h > se * se * v.length_squared() {
+                if h * h > se * se * v.length_squared() {
+                    return None;
+                }
+                if h > self.cfg.height_r * self.cfg.r && !self.supported(t) {
                     return None;
                 }
             }
@@ -222,6 +228,78 @@ impl Mesher<'_> {
         let w = self.cfg.w;
         let score = w[0] * cos_b + w[1] * cos_g + w[2] * ((r - d) / r).max(0.0);
         Some((score, n_new))
+    }
+
+    /// IMPL-CHOICE I8 (not in the paper): true when point `t` has a surface behind it:
+    /// all of its `support_k` nearest other points lie within `support_radius` R, and a
+    /// plane through `t` (and two of them) passes within `support_tol` of at least
+    /// `support_share` of them. A point just across a crease lies on the plane of the face it belongs to,
+    /// which holds half or more of its neighbours; an outlier above a surface sees its
+    /// neighbours on a plane that misses it by its height, and any plane through it cuts
+    /// that surface in a thin strip of few points; an outlier in the volume has fewer
+    /// than `support_k` points within 2R. A per-point property of the input (cached), so
+    /// the order of growth does not change it.
+    fn supported(&mut self, t: u32) -> bool {
+        match self.support[t as usize] {
+            1 => return true,
+            2 => return false,
+            _ => {}
+        }
+        let ok = self.support_test(t);
+        self.support[t as usize] = if ok { 1 } else { 2 };
+        ok
+    }
+
+    fn support_test(&mut self, t: u32) -> bool {
+        let k = self.cfg.support_k;
+        if k < 3 {
+            return false;
+        }
+        let pt = self.pts[t as usize];
+        let state = &self.state;
+        let mut buf = std::mem::take(&mut self.sup_buf);
+        knn(
+            self.grid,
+            self.pts,
+            pt,
+            k,
+            self.cfg.support_radius * self.cfg.r,
+            |i| i != t as usize && state[i] != REFUSED,
+            &mut buf,
+        );
+        // All k neighbours must lie within the radius: an outlier in the volume has only
+        // a few other outliers that close (and any 3 points are coplanar).
+        let mut dirs = std::mem::take(&mut self.sup_dirs);
+        dirs.clear();
+        dirs.extend(buf.iter().map(|&(_, q)| self.pts[q as usize] - pt));
+        let ok = buf.len() >= k && self.plane_through(&dirs);
+        self.sup_dirs = dirs;
+        self.sup_buf = buf;
+        ok
+    }
+
+    /// True when some plane through the point and two of its neighbours (`d`: the
+    /// neighbours minus the point) passes within the support tolerance of at least
+    /// `support_share` of all of them (IMPL-CHOICE I8). Pairs nearly collinear with the
+    /// point (sine of their angle below 0.2) are skipped.
+    fn plane_through(&self, d: &[DVec3]) -> bool {
+        let tol = self.cfg.support_tol;
+        let need = (self.cfg.support_share * d.len() as f64).ceil() as usize;
+        for i in 0..d.len() {
+            for j in i + 1..d.len() {
+                let n = d[i].cross(d[j]);
+                let l2 = n.length_squared();
+                if l2 < 0.04 * d[i].length_squared() * d[j].length_squared() {
+                    continue;
+                }
+                let tl = tol * l2.sqrt();
+                let m = d.iter().filter(|q| q.dot(n).abs() <= tl).count();
+                if m >= need {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// Second triangle `(x, y, z)` of a glue repair: Rule 1 (all angles), degeneracy,
