@@ -6,22 +6,20 @@ use std::time::Instant;
 use glam::DVec3;
 use rayon::prelude::*;
 use reconbench_geom::method::{Diagnostic, Diagnostics, FeatureClass, MethodError, RunCtx};
-use reconbench_geom::spatial::{KnnTable, PointIndex};
+use reconbench_geom::spatial::{KnnTable, knn_self_table};
 
 /// Points handled between two [`RunCtx::checkpoint`] calls of the parallel driver.
 pub(crate) const CHUNK: usize = 16_384;
 
 /// kNN table of every point with the point itself excluded (seed 002 §1.2: "N_p is the k
 /// nearest *other* points"), `k` clamped to `n - 1`. Needs at least 2 points. Timed as the
-/// phases `index` and `knn`.
+/// phase `knn` (the all-points kNN tree builds no kiddo index).
 pub(crate) fn knn_excluding_self(
     points: &[DVec3],
     k: usize,
     ctx: &mut RunCtx,
 ) -> Result<KnnTable, MethodError> {
-    let index = ctx.phase("index", || PointIndex::new(points))?;
-    ctx.checkpoint()?;
-    let table = ctx.phase("knn", || index.knn_all(k, true))?;
+    let table = ctx.phase("knn", || knn_self_table(points, k, true))?;
     ctx.checkpoint()?;
     Ok(table)
 }

@@ -714,13 +714,16 @@ pub fn knn_self_table(points: &[DVec3], k: usize, exclude_self: bool) -> Result<
         .par_chunks_mut(keff)
         .zip(sorted_d2.par_chunks_mut(keff))
         .enumerate()
-        .for_each_init(Vec::new, |buf, (slot, (ri, rd))| {
-            tree.self_row(slot, keff, exclude_self, buf);
-            for (j, c) in buf.iter().enumerate() {
-                ri[j] = c.index;
-                rd[j] = c.dist2;
-            }
-        });
+        .for_each_init(
+            || (Vec::new(), None),
+            |(buf, hint), (slot, (ri, rd))| {
+                tree.self_row(slot, keff, exclude_self, buf, hint);
+                for (j, c) in buf.iter().enumerate() {
+                    ri[j] = c.index;
+                    rd[j] = c.dist2;
+                }
+            },
+        );
     let rank = tree.rank();
     let mut indices = vec![0u32; n * keff];
     let mut dist2 = vec![0.0; n * keff];
@@ -768,9 +771,9 @@ where
     let in_tree_order: Vec<T> = (0..points.len())
         .into_par_iter()
         .map_init(
-            || (init(), Vec::new(), Vec::new()),
-            |(state, buf, hits), slot| {
-                tree.self_row(slot, keff, exclude_self, buf);
+            || (init(), Vec::new(), Vec::new(), None),
+            |(state, buf, hits, hint), slot| {
+                tree.self_row(slot, keff, exclude_self, buf, hint);
                 hits.clear();
                 hits.extend(buf.iter().map(|c| KnnHit {
                     index: c.index,
@@ -971,7 +974,13 @@ impl SelfKnnTree {
 
     /// The `k` nearest points of `q` into `best` (resized to `k`), sorted by
     /// (squared distance, index). `k` must be in `1..=len`.
-    fn knn(&self, q: DVec3, k: usize, best: &mut Vec<Cand>) {
+    ///
+    /// `hint` is the previous query of the same `k` (its point and the distance of its
+    /// k-th neighbour): by the triangle inequality its k neighbours all lie within
+    /// `|q - p| + r` of `q`, so that radius (inflated far beyond rounding) bounds the
+    /// search from the start without changing the result. Consecutive queries in tree
+    /// order are neighbours, which makes the bound tight. Updated on return.
+    fn knn(&self, q: DVec3, k: usize, best: &mut Vec<Cand>, hint: &mut Option<(DVec3, f64)>) {
         best.resize(
             k,
             Cand {
@@ -980,15 +989,23 @@ impl SelfKnnTree {
                 slot: 0,
             },
         );
+        let start = match *hint {
+            Some((p, r)) => {
+                let b = ((q - p).length() + r) * (1.0 + 1e-9);
+                b * b
+            }
+            None => f64::INFINITY,
+        };
         let mut st = SelfQuery {
             q,
             len: 0,
             best,
-            worst_d2: f64::INFINITY,
+            worst_d2: start,
             worst_index: u32::MAX,
         };
         self.search(0, 0, self.items.len(), [0.0; 3], &mut st);
         debug_assert_eq!(st.len, k);
+        *hint = Some((q, best[k - 1].dist2.sqrt()));
     }
 
     fn search(&self, node: usize, lo: usize, hi: usize, off: [f64; 3], st: &mut SelfQuery) {
@@ -1026,10 +1043,17 @@ impl SelfKnnTree {
 
     /// Row of tree slot `slot`: its `keff` nearest points (itself excluded when
     /// `exclude_self`), into `buf`.
-    fn self_row(&self, slot: usize, keff: usize, exclude_self: bool, buf: &mut Vec<Cand>) {
+    fn self_row(
+        &self,
+        slot: usize,
+        keff: usize,
+        exclude_self: bool,
+        buf: &mut Vec<Cand>,
+        hint: &mut Option<(DVec3, f64)>,
+    ) {
         let (p, i) = self.items[slot];
         if exclude_self {
-            self.knn(p, keff + 1, buf);
+            self.knn(p, keff + 1, buf, hint);
             match buf.iter().position(|c| c.index == i) {
                 Some(j) => {
                     buf.remove(j);
@@ -1037,7 +1061,7 @@ impl SelfKnnTree {
                 None => buf.truncate(keff),
             }
         } else {
-            self.knn(p, keff, buf);
+            self.knn(p, keff, buf, hint);
         }
     }
 }

@@ -12,7 +12,7 @@ use std::collections::BinaryHeap;
 
 use glam::DVec3;
 use reconbench_geom::method::MethodError;
-use reconbench_geom::spatial::PointIndex;
+use reconbench_geom::spatial::knn_self_table;
 
 /// What orientation did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -26,7 +26,7 @@ pub struct OrientReport {
 /// Symmetrised k-NN adjacency in CSR form.
 fn knn_graph(points: &[DVec3], k: usize) -> Result<(Vec<u32>, Vec<u32>), MethodError> {
     let n = points.len();
-    let table = PointIndex::new(points)?.knn_all(k, true)?;
+    let table = knn_self_table(points, k, true)?;
     let k = table.k;
     let mut degree = vec![0u32; n + 1];
     for (i, row) in table.indices.chunks(k).enumerate() {

@@ -6,7 +6,8 @@ use std::fmt;
 use std::str::FromStr;
 
 use glam::{DMat3, DVec3};
-use reconbench_geom::{Aabb, PointIndex, mean_spacing};
+use reconbench_geom::spatial::knn_self_table;
+use reconbench_geom::{Aabb, mean_spacing};
 use serde::{Deserialize, Serialize};
 
 use crate::cloud::{GroundTruthCloud, NO_FEATURE, NO_SOURCE};
@@ -502,8 +503,7 @@ pub fn apply(
             if n < 2 {
                 return Ok(());
             }
-            let index = PointIndex::new(&cloud.clean_positions)?;
-            let table = index.knn_all(k, true)?;
+            let table = knn_self_table(&cloud.clean_positions, k, true)?;
             for (i, p) in cloud.positions.iter_mut().enumerate() {
                 let sp = table.dist2(i).iter().map(|d| d.sqrt()).sum::<f64>() / table.k as f64;
                 let a = level * sp;
