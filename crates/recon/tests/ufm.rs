@@ -541,8 +541,10 @@ fn nvc_keeps_cad_analogues_edge_manifold() {
                 },
                 "late flatness",
             ),
+            (nvc(Nvc::FlatOnly, g), "flat-only"),
         ] {
-            let flat = p.nvc == Nvc::Flatness;
+            let flat = p.nvc != Nvc::Generic;
+            let flat_only = p.nvc == Nvc::FlatOnly;
             let late = p.nvc_start == NvcStart::Stagnation;
             let r = run(&pts, p);
             let t = analyze(&r.mesh);
@@ -559,6 +561,19 @@ fn nvc_keeps_cad_analogues_edge_manifold() {
                 late,
                 "{what}: C-06 start"
             );
+            if flat_only {
+                // Only flat points are filtered.
+                assert_eq!(
+                    diag(&r, "nvc_points"),
+                    diag(&r, "nvc_flat_points"),
+                    "{what}"
+                );
+            } else {
+                assert!(
+                    diag(&r, "nvc_points") > diag(&r, "nvc_flat_points"),
+                    "{what}"
+                );
+            }
             if flat {
                 assert!(diag(&r, "nvc_flat_points") > 0.0, "{what}");
                 let a = diag(&r, "nvc_alpha_flat_deg");
@@ -731,8 +746,20 @@ fn nvc_sets_respect_cone_and_range() {
     assert!(n45 > 0);
     // Strictly narrower: some triangle is in the 45° set but not in the 30° one.
     assert!(f45.iter().zip(&f30).any(|(a, b)| *a && !*b));
-    // Deterministic across thread counts, also the flatness mode.
-    for mode in [Nvc::Generic, Nvc::Flatness] {
+    // flat-only = the flatness mode restricted to its flat points.
+    let (ff, sf) = flags(Nvc::Flatness, 45.0, 2);
+    let (fo, so) = flags(Nvc::FlatOnly, 45.0, 2);
+    assert!(
+        fo.iter().zip(&ff).all(|(o, f)| !*o || *f),
+        "flat-only ⊆ flatness"
+    );
+    assert!(
+        so.flat > 0 && so.filtered == so.flat && so.flat == sf.flat,
+        "{so:?} {sf:?}"
+    );
+    assert!(so.members < sf.members);
+    // Deterministic across thread counts, also the flatness modes.
+    for mode in [Nvc::Generic, Nvc::Flatness, Nvc::FlatOnly] {
         let one = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
@@ -746,7 +773,7 @@ fn nvc_sets_respect_cone_and_range() {
         assert_eq!(one.0, two.0);
         let key = |s: NvcStats| (s.filtered, s.flat, s.members, s.last_alpha_flat.to_bits());
         assert_eq!(key(one.1), key(two.1));
-        if mode == Nvc::Flatness {
+        if mode != Nvc::Generic {
             assert!(one.1.flat > 0 && one.1.last_alpha_flat > 0.0, "{:?}", one.1);
         }
     }
@@ -823,12 +850,12 @@ fn bad_nvc_parameters_are_errors() {
     }
     // Parsed from the harness's JSON/TOML form; unknown modes are rejected.
     let p: UfmParams = serde_json::from_str(
-        r#"{"nvc": "flatness", "nvc_start": "stagnation", "nvc_level": "below-class"}"#,
+        r#"{"nvc": "flat-only", "nvc_start": "stagnation", "nvc_level": "below-class"}"#,
     )
     .unwrap();
     assert_eq!(
         (p.nvc, p.nvc_start, p.nvc_level),
-        (Nvc::Flatness, NvcStart::Stagnation, NvcLevel::BelowClass)
+        (Nvc::FlatOnly, NvcStart::Stagnation, NvcLevel::BelowClass)
     );
     assert!(serde_json::from_str::<UfmParams>(r#"{"nvc": "on"}"#).is_err());
     // Degenerate input with NVC on is still an error, not a panic.

@@ -55,7 +55,8 @@ impl NvcCfg {
 /// Counters of the NVC passes (summed over iterations).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct NvcStats {
-    /// Points that got a cone (`G_v = 0` with a valid umbrella and nominal normal).
+    /// Points that got a cone (`G_v = 0` with a valid umbrella and nominal normal; with
+    /// `flat-only` only the flat ones).
     pub filtered: u64,
     /// Of those, points with a potentially flat umbrella (flatness-sensitive cone).
     pub flat: u64,
@@ -200,7 +201,7 @@ pub fn nvc_flags(
     out: &mut [bool],
 ) -> NvcStats {
     let alpha_flat = match cfg.mode {
-        Nvc::Flatness => cfg.alpha_flat(mean_dihedral(cx, m)),
+        Nvc::Flatness | Nvc::FlatOnly => cfg.alpha_flat(mean_dihedral(cx, m)),
         _ => None,
     };
     let cos_gen = cfg.generic.cos();
@@ -269,6 +270,10 @@ fn vertex_nvc(
             fold_angles(pts, v as u32, &s.ring, &mut s.folds);
             flat = flat_umbrella(&s.shadow, &s.folds, af);
         }
+    }
+    // Ablation `flat-only`: non-flat points get no filter.
+    if cfg.mode == Nvc::FlatOnly && !flat {
+        return;
     }
     // Nominal normal N̄_v (Algorithm B on the current state).
     let pv = pts[v];

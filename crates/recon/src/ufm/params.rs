@@ -65,6 +65,11 @@ pub enum Nvc {
     /// flatness-sensitive cone `α_flat = nvc_flat_factor · θ̄` (θ̄ = mean dihedral
     /// angle of the matched mesh), all others the generic cone.
     Flatness,
+    /// Ablation (not in the thesis): only the points with a potentially flat umbrella
+    /// get a cone (`α_flat`); all others keep chapter 3's key. Measured: the generic
+    /// cone around an averaged normal at points on a sharp edge protects the triangles
+    /// that cut the edge off (docs/methods/ufm.md).
+    FlatOnly,
 }
 
 /// When NVC filtering starts (ASSUMPTION C-06).
@@ -278,7 +283,7 @@ pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
     (
         "nvc",
         "",
-        "Algorithm C (ch. 5): normal vector cone filtering: off, generic (pi/4) or flatness",
+        "Algorithm C (ch. 5) normal vector cones: off, generic (pi/4), flatness, flat-only",
     ),
     (
         "nvc_angle",
