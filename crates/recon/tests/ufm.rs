@@ -542,6 +542,13 @@ fn nvc_keeps_cad_analogues_edge_manifold() {
                 "late flatness",
             ),
             (nvc(Nvc::FlatOnly, g), "flat-only"),
+            (
+                UfmParams {
+                    update: Update::GaussSeidel,
+                    ..nvc(Nvc::Flatness, g)
+                },
+                "gauss-seidel flatness",
+            ),
         ] {
             let flat = p.nvc != Nvc::Generic;
             let flat_only = p.nvc == Nvc::FlatOnly;
