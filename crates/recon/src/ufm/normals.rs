@@ -377,3 +377,41 @@ impl NormalEstimator for UfmMesh {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn facet_average_of_a_fan() {
+        // A regular hexagon fan around the origin, tilted out of z = 0 on one side.
+        let mut pts = vec![DVec3::ZERO];
+        for j in 0..6 {
+            let a = j as f64 * std::f64::consts::PI / 3.0;
+            pts.push(DVec3::new(a.cos(), a.sin(), 0.0));
+        }
+        let ring: Vec<u32> = (1..=6).collect();
+        let n = facet_average(&pts, DVec3::ZERO, &ring, |_| 3.0).unwrap();
+        assert!((n - DVec3::Z).length() < 1e-12, "{n}");
+        // Weights scale out; zero weights give no normal.
+        let n2 = facet_average(&pts, DVec3::ZERO, &ring, |j| 1.0 + j as f64).unwrap();
+        assert!((n2 - DVec3::Z).length() < 1e-12);
+        assert!(facet_average(&pts, DVec3::ZERO, &ring, |_| 0.0).is_none());
+        // Weighted towards a tilted facet: lift p1 and p2, the facet (0, p1, p2) tilts
+        // and the average follows the heavier weight.
+        pts[1].z = 0.5;
+        pts[2].z = 0.5;
+        let light = facet_average(&pts, DVec3::ZERO, &ring, |_| 1.0).unwrap();
+        let heavy = facet_average(
+            &pts,
+            DVec3::ZERO,
+            &ring,
+            |j| if j == 0 { 10.0 } else { 1.0 },
+        )
+        .unwrap();
+        assert!(heavy.dot(DVec3::Z) < light.dot(DVec3::Z), "{heavy} {light}");
+        // A fan folded onto itself cancels (ASSUMPTION B-03): None.
+        let pts = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::X, DVec3::Y];
+        assert!(facet_average(&pts, DVec3::ZERO, &[1, 2, 3, 4], |_| 1.0).is_none());
+    }
+}
