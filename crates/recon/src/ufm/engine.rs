@@ -447,7 +447,8 @@ fn rebuild_vertex(
         } => {
             cx.prepare(v, &mut s.g);
             // Line 9: key_v(t) = (class_v(t), size rank, id); with NVC filtering
-            // (tier(t), class_v(t), size rank, id), see `update_level`.
+            // ASSUMPTION C-05: (tier(t), class_v(t), size rank, id) with matched facets
+            // in the last tier, see `update_level`.
             sort_order(s, n, |i| {
                 let f = row[i] as usize;
                 let member = ignore_member || inu[base + i];

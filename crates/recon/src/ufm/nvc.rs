@@ -84,6 +84,7 @@ impl std::ops::Add for NvcStats {
 /// neighbours on opposite sides of the edge give 0 and a right-angle edge π/2.
 /// Degenerate triangles give 0 (no evidence of a bend).
 pub fn dihedral(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
+    // ASSUMPTION C-01: ab traversed as a→b in the first triangle, b→a in the second.
     let n1 = (b - a).cross(c - a).normalize_or_zero();
     let n2 = (d - a).cross(b - a).normalize_or_zero();
     if n1 == DVec3::ZERO || n2 == DVec3::ZERO {
@@ -267,6 +268,8 @@ fn vertex_nvc(
             s.shadow.extend((0..k).map(|j| {
                 mf(j) == 3 && (grade[s.ring[j] as usize] || grade[s.ring[(j + 1) % k] as usize])
             }));
+            // ASSUMPTION C-01: the fold angles use normals oriented by the umbrella's
+            // cyclic order, so consecutive coplanar facets bend by 0.
             fold_angles(pts, v as u32, &s.ring, &mut s.folds);
             flat = flat_umbrella(&s.shadow, &s.folds, af);
         }
