@@ -13,7 +13,8 @@ use reconbench_delaunay::{Delaunay, Facet};
 use reconbench_geom::method::{MethodError, RunCtx};
 
 use super::matching::{StopHistory, StopRule, absolute_index, class};
-use super::params::{Init, SizeOrder, UfmParams, Update};
+use super::nvc::{NvcCfg, NvcStats, nvc_flags};
+use super::params::{Init, NvcLevel, NvcStart, SizeOrder, UfmParams, Update};
 use super::umbrella::LinkGraph;
 
 /// The Delaunay complex with the per-triangle attributes UFM needs (computed once).
@@ -111,6 +112,11 @@ impl Complex {
             .into_par_iter()
             .map(|v| dt.facets_of_vertex(v).len() as u32)
             .collect();
+        if lens.iter().any(|&n| n as usize >= MAX_ROW) {
+            return Err(MethodError::InvalidInput(format!(
+                "a vertex has more than {MAX_ROW} Delaunay triangles"
+            )));
+        }
         let mut off = Vec::with_capacity(nv + 1);
         off.push(0u32);
         let mut acc = 0u32;
@@ -324,18 +330,52 @@ enum Mode<'a> {
         ignore_member: bool,
         /// Fold bound in radians (0 = no fold repair).
         fold: f64,
+        /// Algorithm C: the `NVC_v` flags (one per CSR slot), `None` = chapter 3's key.
+        nvc: Option<&'a [bool]>,
+        /// Where NVC membership sits in the key (`nvc_level`).
+        nvc_level: NvcLevel,
     },
 }
+
+/// Bit layout of a removal key: level (4 bits) << [`LEVEL_SHIFT`] | size rank (32 bits)
+/// << [`RANK_SHIFT`] | local index (28 bits). The level is the class of Table 3.1
+/// (0..=5), or with NVC filtering the tier-and-class of Algorithm C (0..=10).
+const RANK_SHIFT: u32 = 28;
+/// See [`RANK_SHIFT`].
+const LEVEL_SHIFT: u32 = 60;
+/// Most triangles at one vertex the key layout supports (checked in [`Complex::new`]).
+const MAX_ROW: usize = 1 << RANK_SHIFT;
 
 /// Sorts the local facets of `DT_v` by `key(i)` into `s.order`.
 fn sort_order(s: &mut Scratch, n: usize, key: impl Fn(usize) -> u64) {
     s.keys.clear();
-    // key: class (3 bits) << 61 | rank (32 bits) << 29 | local index (29 bits).
     s.keys.extend((0..n).map(|i| key(i) | i as u64));
     s.keys.sort_unstable();
     s.order.clear();
-    s.order
-        .extend(s.keys.iter().map(|&k| (k & ((1u64 << 29) - 1)) as u32));
+    s.order.extend(
+        s.keys
+            .iter()
+            .map(|&k| (k & ((1u64 << RANK_SHIFT) - 1)) as u32),
+    );
+}
+
+/// Removal level of a triangle in the update key (first removed first). Without NVC
+/// filtering (`nvc = None`) it is the Table 3.1 class `class(m, member)` (0..=5).
+/// With NVC filtering (Algorithm C, Fig. 5.5's four-level inheritance) the top level
+/// is the tier: ASSUMPTION C-05: tier 0 = unmatched and not in `NVC_v` (removed
+/// first), tier 1 = unmatched and in `NVC_v` (kept preferentially), tier 2 = matched
+/// (`M_f = 3`, kept last as in chapter 3, so NVC never outranks a matched facet);
+/// inside a tier the class, then size. Encoded as `5 · tier + class` (0..=10).
+/// `level = BelowClass` (ablation, `nvc_level = below-class`): NVC membership only
+/// ranks inside a class, between the class and the size (`2 · class + [t ∈ NVC_v]`).
+pub fn update_level(m: u8, member: bool, nvc: Option<bool>, level: NvcLevel) -> u8 {
+    let cl = class(m, member);
+    match (nvc, level) {
+        (None, _) => cl,
+        (Some(_), _) if m >= 3 => 10,
+        (Some(x), NvcLevel::Top) => 5 * x as u8 + cl,
+        (Some(x), NvcLevel::BelowClass) => 2 * cl + x as u8,
+    }
 }
 
 /// Rebuilds the umbrella of `v` into `out` (one flag per local facet of `DT_v`).
@@ -367,7 +407,7 @@ fn rebuild_vertex(
                 );
                 // Step 2.2: key (-diam, id), largest first.
                 sort_order(s, sub.len(), |j| {
-                    (cx.rank_init[row[sub[j] as usize] as usize] as u64) << 29
+                    (cx.rank_init[row[sub[j] as usize] as usize] as u64) << RANK_SHIFT
                 });
                 let res = build_checked(s, pts, v as u32, None, fold, &mut c);
                 if let Ok(i) = res {
@@ -384,7 +424,9 @@ fn rebuild_vertex(
                 c.init_fallbacks += 1;
             }
             cx.prepare(v, &mut s.g);
-            sort_order(s, n, |i| (cx.rank_init[row[i] as usize] as u64) << 29);
+            sort_order(s, n, |i| {
+                (cx.rank_init[row[i] as usize] as u64) << RANK_SHIFT
+            });
             match build_checked(s, pts, v as u32, None, fold, &mut c) {
                 Ok(i) => c.dropped_cycles += i.dropped_cycles as u64,
                 Err(_) => {
@@ -400,13 +442,18 @@ fn rebuild_vertex(
             lock,
             ignore_member,
             fold,
+            nvc,
+            nvc_level,
         } => {
             cx.prepare(v, &mut s.g);
-            // Line 9: key_v(t) = (class_v(t), size rank, id).
+            // Line 9: key_v(t) = (class_v(t), size rank, id); with NVC filtering
+            // ASSUMPTION C-05: (tier(t), class_v(t), size rank, id) with matched facets
+            // in the last tier, see `update_level`.
             sort_order(s, n, |i| {
                 let f = row[i] as usize;
-                let cl = class(m[f], ignore_member || inu[base + i]) as u64;
-                (cl << 61) | ((cx.rank_update[f] as u64) << 29)
+                let member = ignore_member || inu[base + i];
+                let lvl = update_level(m[f], member, nvc.map(|x| x[base + i]), nvc_level) as u64;
+                (lvl << LEVEL_SHIFT) | ((cx.rank_update[f] as u64) << RANK_SHIFT)
             });
             // Line 10 (ASSUMPTION A-09): lock the (3) facets.
             let any_locked = lock && row.iter().any(|&f| m[f as usize] == 3);
@@ -477,14 +524,23 @@ pub fn fully_matched(cx: &Complex, inu: &[bool], m: &[u8], v: usize) -> bool {
 
 /// Grades `G_v` of all vertices.
 pub fn grades(cx: &Complex, inu: &[bool], m: &[u8]) -> Vec<bool> {
-    (0..cx.n_vertices())
-        .into_par_iter()
-        .map(|v| fully_matched(cx, inu, m, v))
-        .collect()
+    let mut g = Vec::new();
+    grades_into(cx, inu, m, &mut g);
+    g
+}
+
+/// Grades `G_v` of all vertices into `g` (reused buffer).
+pub fn grades_into(cx: &Complex, inu: &[bool], m: &[u8], g: &mut Vec<bool>) {
+    g.clear();
+    g.par_extend(
+        (0..cx.n_vertices())
+            .into_par_iter()
+            .map(|v| fully_matched(cx, inu, m, v)),
+    );
 }
 
 /// Vertex blocks with their disjoint slot ranges of `out`, for the parallel update.
-fn blocks<'a>(
+pub(super) fn blocks<'a>(
     cx: &Complex,
     out: &'a mut [bool],
     per: usize,
@@ -554,20 +610,14 @@ pub struct UfmState {
     pub counters: Counters,
     /// Stagnation escapes used (non-faithful extension).
     pub escapes: usize,
+    /// Algorithm C counters (zero when `nvc = off`).
+    pub nvc: NvcStats,
+    /// Iteration at which NVC filtering started (`None`: never).
+    pub nvc_from: Option<usize>,
     /// Seconds of Step 2 (initial umbrellas).
     pub init_s: f64,
     /// Seconds of Step 3 (iterations).
     pub iterate_s: f64,
-}
-
-/// Fraction of fully matched umbrellas.
-fn matched_fraction(cx: &Complex, inu: &[bool], m: &[u8]) -> f64 {
-    let nv = cx.n_vertices();
-    let n = (0..nv)
-        .into_par_iter()
-        .filter(|&v| fully_matched(cx, inu, m, v))
-        .count();
-    n as f64 / nv.max(1) as f64
 }
 
 /// Steps 2–3: initial umbrellas, then updates until a stop rule fires.
@@ -592,21 +642,52 @@ pub fn run(cx: Complex, p: &UfmParams, ctx: &RunCtx) -> Result<UfmState, MethodE
     let mut next = vec![false; nslots];
     let mut it = 0usize;
     let mut escapes = 0usize;
+    // Algorithm C: the NVC flags (one per CSR slot) and whether filtering is active.
+    let nvc_cfg = NvcCfg::from_params(p);
+    let mut nvc_slots = if nvc_cfg.is_some() {
+        vec![false; nslots]
+    } else {
+        Vec::new()
+    };
+    let mut nvc_on = nvc_cfg.is_some() && p.nvc_start == NvcStart::First;
+    let mut nvc_from = None;
+    let mut nvc_stats = NvcStats {
+        last_alpha_flat: f64::NAN,
+        ..Default::default()
+    };
+    let mut g = Vec::new();
     let stop = loop {
         // Step 3.1 and the stop test (3.5, A-07).
         matching_indices(&cx, &inu, &mut m);
-        let mu = matched_fraction(&cx, &inu, &m);
+        grades_into(&cx, &inu, &m, &mut g);
+        let mu = g.iter().filter(|&&x| x).count() as f64 / cx.n_vertices().max(1) as f64;
         let mut escape = false;
         if let Some(rule) = history.record(mu, &inu, it, p.patience, p.max_iter) {
-            // Non-faithful extension: on a fixed point or limit cycle, run one update
-            // with the membership level switched off instead of stopping.
-            if matches!(rule, StopRule::FixedPoint | StopRule::LimitCycle) && escapes < p.escapes {
+            let stuck = matches!(rule, StopRule::FixedPoint | StopRule::LimitCycle);
+            if stuck && nvc_cfg.is_some() && !nvc_on {
+                // ASSUMPTION C-06 (ablation `nvc_start = stagnation`): NVC filtering
+                // starts when the plain loop stagnates, instead of stopping.
+                nvc_on = true;
+            } else if stuck && escapes < p.escapes {
+                // Non-faithful extension: on a fixed point or limit cycle, run one
+                // update with the membership level switched off instead of stopping.
                 escapes += 1;
                 escape = true;
             } else {
                 break rule;
             }
         }
+        // Algorithm C, lines 5-11: θ̄, α_flat and NVC_v of every G_v = 0 point, from
+        // the state at the start of the iteration (synchronous).
+        let nvc = match (&nvc_cfg, nvc_on) {
+            (Some(cfg), true) => {
+                // ASSUMPTION C-06 (default): from the first update iteration on.
+                nvc_from.get_or_insert(it);
+                nvc_stats = nvc_stats + nvc_flags(&cx, &inu, &m, &g, cfg, &mut nvc_slots);
+                Some(&nvc_slots[..])
+            }
+            _ => None,
+        };
         ctx.checkpoint()?;
         ctx.progress(it as f64 / p.max_iter.max(1) as f64);
         // Steps 3.2–3.4.
@@ -619,13 +700,13 @@ pub fn run(cx: Complex, p: &UfmParams, ctx: &RunCtx) -> Result<UfmState, MethodE
                     lock: p.lock_matched,
                     ignore_member: escape,
                     fold: p.max_fold.to_radians(),
+                    nvc,
+                    nvc_level: p.nvc_level,
                 };
                 // A-08, and with the fold repair: a folded umbrella is not frozen.
                 let bound = p.max_fold.to_radians();
-                let frozen = |v: usize| {
-                    fully_matched(&cx, &inu, &m, v)
-                        && (bound <= 0.0 || !umbrella_folds(&cx, &inu, v, bound))
-                };
+                let frozen =
+                    |v: usize| g[v] && (bound <= 0.0 || !umbrella_folds(&cx, &inu, v, bound));
                 let skip: Option<&(dyn Fn(usize) -> bool + Sync)> =
                     if p.freeze_full { Some(&frozen) } else { None };
                 counters = counters + rebuild_all(&cx, &mut next, &mode, skip, Some(&inu));
@@ -633,7 +714,7 @@ pub fn run(cx: Complex, p: &UfmParams, ctx: &RunCtx) -> Result<UfmState, MethodE
                 std::mem::swap(&mut inu, &mut next);
             }
             Update::GaussSeidel => {
-                counters = counters + gauss_seidel_sweep(&cx, &mut inu, &mut m, p, escape);
+                counters = counters + gauss_seidel_sweep(&cx, &mut inu, &mut m, p, escape, nvc);
             }
         }
     };
@@ -647,6 +728,8 @@ pub fn run(cx: Complex, p: &UfmParams, ctx: &RunCtx) -> Result<UfmState, MethodE
         stop,
         counters,
         escapes,
+        nvc: nvc_stats,
+        nvc_from,
         init_s,
         iterate_s: t1.elapsed().as_secs_f64(),
     })
@@ -660,6 +743,7 @@ fn gauss_seidel_sweep(
     m: &mut [u8],
     p: &UfmParams,
     ignore_member: bool,
+    nvc: Option<&[bool]>,
 ) -> Counters {
     let mut s = Scratch::default();
     let mut out = Vec::new();
@@ -682,6 +766,8 @@ fn gauss_seidel_sweep(
             lock: p.lock_matched,
             ignore_member,
             fold: bound,
+            nvc,
+            nvc_level: p.nvc_level,
         };
         c = c + rebuild_vertex(cx, v, &mut s, &mode, &mut out);
         for (i, &f) in row.iter().enumerate() {
@@ -709,6 +795,8 @@ pub fn rebuild_one(cx: &Complex, v: usize, inu: &[bool], m: &[u8], lock: bool) -
         lock,
         ignore_member: false,
         fold: 0.0,
+        nvc: None,
+        nvc_level: NvcLevel::Top,
     };
     rebuild_vertex(cx, v, &mut s, &mode, &mut out);
     out

@@ -12,13 +12,15 @@
 //!
 //! Files: [`params`], [`umbrella`] (BuildUmbrella on the link graph), [`matching`]
 //! (Table 3.1 classes, umbrella states, A-07 stop rules), [`engine`] (attributes,
-//! iterations), [`normals`] (`ufm-mesh`, Algorithm B of chapter 4).
+//! iterations), [`normals`] (`ufm-mesh`, Algorithm B of chapter 4), [`nvc`] (Algorithm
+//! C of chapter 5: Normal Vector Cone filtering, the `nvc` option, off by default).
 //! See `docs/methods/ufm.md`.
 
 pub mod engine;
 pub mod geometry;
 pub mod matching;
 pub mod normals;
+pub mod nvc;
 pub mod params;
 pub mod umbrella;
 
@@ -35,7 +37,9 @@ use reconbench_geom::{PointCloud, TriMesh};
 pub use engine::{Complex, Counters, UfmState};
 pub use matching::StopRule;
 pub use normals::{UfmMesh, UfmMeshParams};
-pub use params::{Init, OutputSet, PARAM_DOCS, SizeOrder, UfmParams, Update};
+pub use params::{
+    Init, Nvc, NvcLevel, NvcStart, OutputSet, PARAM_DOCS, SizeOrder, UfmParams, Update,
+};
 
 /// Registry name.
 pub const NAME: &str = "ufm";
@@ -147,7 +151,10 @@ fn assumption_flags(p: &UfmParams) -> String {
     format!(
         "A-01=exact-dedup A-02=facet-id A-03=open-ball A-04=skip+rebuild A-05=max-min-key \
          A-06={:?} A-07=converged/fixed/cycle{}/patience:{}/max:{} A-08=freeze:{} \
-         A-09=lock:{} A-11={:?} init={:?} update={:?} escapes={} max_fold={} reorder={}",
+         A-09=lock:{} A-11={:?} init={:?} update={:?} escapes={} max_fold={} reorder={} \
+         nvc={:?} C-01=consistent-dihedral C-02=min(factor:{}*mean,alpha_gen:{}) \
+         C-03=adjacent-shadow-pair C-04=flat:facet-average C-05={:?} \
+         C-06={:?} C-07=full-unfiltered R={}",
         p.size_order,
         matching::CYCLE_MEMORY,
         p.patience,
@@ -159,7 +166,13 @@ fn assumption_flags(p: &UfmParams) -> String {
         p.update,
         p.escapes,
         p.max_fold,
-        p.reorder
+        p.reorder,
+        p.nvc,
+        p.nvc_flat_factor,
+        p.nvc_angle,
+        p.nvc_level,
+        p.nvc_start,
+        p.nvc_range
     )
 }
 
@@ -264,6 +277,22 @@ impl Reconstructor for Ufm {
         num(&mut d, "build_failures", c.build_failures as f64);
         num(&mut d, "fold_repairs", c.fold_repairs as f64);
         num(&mut d, "escapes_used", st.escapes as f64);
+        if p.nvc != Nvc::Off {
+            // Algorithm C (summed over the iterations with filtering).
+            num(&mut d, "nvc_points", st.nvc.filtered as f64);
+            num(&mut d, "nvc_flat_points", st.nvc.flat as f64);
+            num(&mut d, "nvc_triangles", st.nvc.members as f64);
+            if let Some(it) = st.nvc_from {
+                num(&mut d, "nvc_from_iteration", it as f64);
+            }
+            if st.nvc.last_alpha_flat.is_finite() {
+                num(
+                    &mut d,
+                    "nvc_alpha_flat_deg",
+                    st.nvc.last_alpha_flat.to_degrees(),
+                );
+            }
+        }
         num(&mut d, "pinched_vertices", rep.non_manifold_vertices as f64);
         num(&mut d, "non_manifold_edges", rep.non_manifold_edges as f64);
         num(&mut d, "boundary_edges", rep.boundary_edges as f64);

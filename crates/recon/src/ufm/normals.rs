@@ -21,7 +21,7 @@ use reconbench_normals::orient_mst;
 use reconbench_normals::plane_fit::fit_plane_normal;
 use serde::{Deserialize, Serialize};
 
-use super::engine::UfmState;
+use super::engine::{Complex, UfmState};
 use super::params::{Init, UfmParams};
 use super::umbrella::LinkGraph;
 
@@ -164,6 +164,62 @@ fn wpf(pts: &[DVec3], q: &[u32], c: u32) -> DVec3 {
     fit_plane_normal(pts, q, |x| (-x.distance_squared(pc) / s2).exp())
 }
 
+/// Eq. 4.5/4.6: the weighted average of the umbrella facet normals of the point at
+/// `pv` with ring `ring` in cyclic order (facet `j` = `(v, ring[j], ring[j+1])`),
+/// weights `w_j = mult(j) · θ_j` (`θ_j` the facet's angle at `v`; Algorithm B:
+/// `mult = M_f`, Algorithm C's flat points: `M_f + 1` on shadow facets). `None` when the
+/// weights vanish or the average cancels (ASSUMPTION B-03).
+pub fn facet_average(
+    pts: &[DVec3],
+    pv: DVec3,
+    ring: &[u32],
+    mult: impl Fn(usize) -> f64,
+) -> Option<DVec3> {
+    let k = ring.len();
+    let mut sum = DVec3::ZERO;
+    let mut wsum = 0.0;
+    for j in 0..k {
+        let a = pts[ring[j] as usize] - pv;
+        let b = pts[ring[(j + 1) % k] as usize] - pv;
+        let nrm = a.cross(b).normalize_or_zero();
+        let cos = a.dot(b) / (a.length() * b.length());
+        let theta = cos.clamp(-1.0, 1.0).acos();
+        // Eq. 4.6: w_i = M_{f_i} θ_i.
+        let w = mult(j) * theta;
+        sum += w * nrm;
+        wsum += w;
+    }
+    if wsum > 0.0 {
+        let nn = sum / wsum;
+        if nn.length() >= 1e-12 {
+            return Some(nn.normalize());
+        }
+    }
+    None
+}
+
+/// Lines 11-12 of Algorithm B (ASSUMPTION B-02): the WPF (Eq. 4.7) about vertex `v`
+/// over `Q = {v} ∪` the points of `DT(U)_v` (triangles at `v` with `M_t >= 1`), or
+/// `{v} ∪ ring` when that has fewer than 3 points; `q` is scratch. Zero when degenerate.
+pub fn dtu_plane_fit(cx: &Complex, m: &[u8], v: usize, ring: &[u32], q: &mut Vec<u32>) -> DVec3 {
+    let facets = cx.facets();
+    q.clear();
+    q.push(v as u32);
+    for &f in cx.row(v) {
+        if m[f as usize] >= 1 {
+            q.extend_from_slice(&facets[f as usize].v);
+        }
+    }
+    q.sort_unstable();
+    q.dedup();
+    if q.len() < 3 {
+        q.clear();
+        q.push(v as u32);
+        q.extend_from_slice(ring);
+    }
+    wpf(cx.dt.vertices(), q, v as u32)
+}
+
 /// Per-vertex result of the first pass.
 struct Local {
     ring: Vec<u32>,
@@ -176,7 +232,6 @@ struct Local {
 pub fn estimate_from_state(st: &UfmState, rings: u32) -> (Vec<DVec3>, Vec<Branch>) {
     let cx = &st.cx;
     let pts = cx.dt.vertices();
-    let facets = cx.facets();
     let nv = cx.n_vertices();
     let m = &st.m;
     let locals: Vec<Local> = (0..nv)
@@ -201,51 +256,20 @@ pub fn estimate_from_state(st: &UfmState, rings: u32) -> (Vec<DVec3>, Vec<Branch
                     .iter()
                     .filter(|&&i| m[row[i as usize] as usize] == 3)
                     .count();
-                if ubar >= 3 {
-                    let k = fl.len();
-                    let mut sum = DVec3::ZERO;
-                    let mut wsum = 0.0;
-                    for j in 0..k {
-                        let a = pts[ring[j] as usize] - pv;
-                        let b = pts[ring[(j + 1) % k] as usize] - pv;
-                        let nrm = a.cross(b).normalize_or_zero();
-                        let cos = a.dot(b) / (a.length() * b.length());
-                        let theta = cos.clamp(-1.0, 1.0).acos();
-                        // Eq. 4.6: w_i = M_{f_i} θ_i.
-                        let w = m[row[fl[j] as usize] as usize] as f64 * theta;
-                        sum += w * nrm;
-                        wsum += w;
-                    }
-                    if wsum > 0.0 {
-                        let nn = sum / wsum;
-                        // ASSUMPTION B-03: a cancelling average falls back to WPF.
-                        if nn.length() >= 1e-12 {
-                            return Local {
-                                ring: ring.clone(),
-                                normal: nn.normalize(),
-                                branch: Branch::FacetAverage,
-                            };
-                        }
-                    }
+                if ubar >= 3
+                    && let Some(nn) =
+                        facet_average(pts, pv, ring, |j| m[row[fl[j] as usize] as usize] as f64)
+                {
+                    return Local {
+                        ring: ring.clone(),
+                        normal: nn,
+                        branch: Branch::FacetAverage,
+                    };
                 }
-                // Lines 11-12 (ASSUMPTION B-02): Q = {v} ∪ points of DT(U)_v.
-                q.clear();
-                q.push(v as u32);
-                for &f in row {
-                    if m[f as usize] >= 1 {
-                        q.extend_from_slice(&facets[f as usize].v);
-                    }
-                }
-                q.sort_unstable();
-                q.dedup();
-                if q.len() < 3 {
-                    q.clear();
-                    q.push(v as u32);
-                    q.extend_from_slice(ring);
-                }
+                // Lines 11-12 (ASSUMPTION B-02): WPF over {v} ∪ points of DT(U)_v.
                 Local {
                     ring: ring.clone(),
-                    normal: wpf(pts, q, v as u32),
+                    normal: dtu_plane_fit(cx, m, v, ring, q),
                     branch: Branch::PlaneFit,
                 }
             },
@@ -351,5 +375,43 @@ impl NormalEstimator for UfmMesh {
             oriented,
             diagnostics: d,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn facet_average_of_a_fan() {
+        // A regular hexagon fan around the origin, tilted out of z = 0 on one side.
+        let mut pts = vec![DVec3::ZERO];
+        for j in 0..6 {
+            let a = j as f64 * std::f64::consts::PI / 3.0;
+            pts.push(DVec3::new(a.cos(), a.sin(), 0.0));
+        }
+        let ring: Vec<u32> = (1..=6).collect();
+        let n = facet_average(&pts, DVec3::ZERO, &ring, |_| 3.0).unwrap();
+        assert!((n - DVec3::Z).length() < 1e-12, "{n}");
+        // Weights scale out; zero weights give no normal.
+        let n2 = facet_average(&pts, DVec3::ZERO, &ring, |j| 1.0 + j as f64).unwrap();
+        assert!((n2 - DVec3::Z).length() < 1e-12);
+        assert!(facet_average(&pts, DVec3::ZERO, &ring, |_| 0.0).is_none());
+        // Weighted towards a tilted facet: lift p1 and p2, the facet (0, p1, p2) tilts
+        // and the average follows the heavier weight.
+        pts[1].z = 0.5;
+        pts[2].z = 0.5;
+        let light = facet_average(&pts, DVec3::ZERO, &ring, |_| 1.0).unwrap();
+        let heavy = facet_average(
+            &pts,
+            DVec3::ZERO,
+            &ring,
+            |j| if j == 0 { 10.0 } else { 1.0 },
+        )
+        .unwrap();
+        assert!(heavy.dot(DVec3::Z) < light.dot(DVec3::Z), "{heavy} {light}");
+        // A fan folded onto itself cancels (ASSUMPTION B-03): None.
+        let pts = [DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::X, DVec3::Y];
+        assert!(facet_average(&pts, DVec3::ZERO, &[1, 2, 3, 4], |_| 1.0).is_none());
     }
 }

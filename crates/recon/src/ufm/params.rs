@@ -50,6 +50,51 @@ pub enum Update {
     GaussSeidel,
 }
 
+/// Normal Vector Cone filtering (Algorithm C of the thesis, chapter 5, spec §1.3;
+/// `super::nvc`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Nvc {
+    /// Chapter 3's loop (no cone level in the key).
+    #[default]
+    Off,
+    /// Every point with `G_v = 0` gets the generic cone `α_gen` around its nominal
+    /// normal (the thesis: "can help the algorithm converge").
+    Generic,
+    /// Algorithm C: points with a potentially flat umbrella get the
+    /// flatness-sensitive cone `α_flat = nvc_flat_factor · θ̄` (θ̄ = mean dihedral
+    /// angle of the matched mesh), all others the generic cone.
+    Flatness,
+    /// Ablation (not in the thesis): only the points with a potentially flat umbrella
+    /// get a cone (`α_flat`); all others keep chapter 3's key. Measured: the generic
+    /// cone around an averaged normal at points on a sharp edge protects the triangles
+    /// that cut the edge off (docs/methods/ufm.md).
+    FlatOnly,
+}
+
+/// When NVC filtering starts (ASSUMPTION C-06).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum NvcStart {
+    /// From the first update iteration on (the spec's reading).
+    #[default]
+    First,
+    /// Only once the plain loop reaches a fixed point or limit cycle (ablation).
+    Stagnation,
+}
+
+/// Where NVC membership sits in the update key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum NvcLevel {
+    /// The thesis (Fig. 5.5): the new top level, above the matching indices (for
+    /// unmatched triangles; matched ones stay last, ASSUMPTION C-05).
+    #[default]
+    Top,
+    /// Ablation: inside each Table 3.1 class, above the size level only.
+    BelowClass,
+}
+
 /// Parameters of [`super::Ufm`]. Defaults are the thesis's and the spec's ASSUMPTION
 /// choices.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -86,6 +131,19 @@ pub struct UfmParams {
     /// unlocked, and the umbrella rebuilt (up to 3 times). Folded fully matched
     /// umbrellas are not frozen. `0` = off (the thesis's literal loop).
     pub max_fold: f64,
+    /// Algorithm C (chapter 5): NVC filtering in the update; `off` = chapter 3.
+    pub nvc: Nvc,
+    /// Generic cone angle `α_gen` in degrees (spec: 45 = π/4); also the clamp of
+    /// `α_flat` (ASSUMPTION C-02).
+    pub nvc_angle: f64,
+    /// `α_flat = nvc_flat_factor · θ̄` (spec: 2, "doubling the average dihedral angle").
+    pub nvc_flat_factor: f64,
+    /// Limitation range `R` in umbrella rings: 1 or 2 (spec: 2).
+    pub nvc_range: u32,
+    /// ASSUMPTION C-06: when NVC filtering starts.
+    pub nvc_start: NvcStart,
+    /// ASSUMPTION C-05: where NVC membership sits in the key.
+    pub nvc_level: NvcLevel,
     /// Run on the points in Morton order (memory locality; 2-8x faster per-vertex
     /// phases on large clouds). Changes only which of exactly tied triangles the
     /// A-02 tie-break (facet id = lexicographic rank of the vertex triple) puts first;
@@ -109,6 +167,12 @@ impl Default for UfmParams {
             patience: 20,
             escapes: 0,
             max_fold: 0.0,
+            nvc: Nvc::Off,
+            nvc_angle: 45.0,
+            nvc_flat_factor: 2.0,
+            nvc_range: 2,
+            nvc_start: NvcStart::First,
+            nvc_level: NvcLevel::Top,
             reorder: true,
             genus: None,
         }
@@ -134,6 +198,24 @@ impl UfmParams {
             return Err(MethodError::InvalidParameter {
                 name: "max_fold".into(),
                 message: format!("must be in [0, 180] degrees, got {}", self.max_fold),
+            });
+        }
+        if !(self.nvc_angle > 0.0 && self.nvc_angle <= 90.0) {
+            return Err(MethodError::InvalidParameter {
+                name: "nvc_angle".into(),
+                message: format!("must be in (0, 90] degrees, got {}", self.nvc_angle),
+            });
+        }
+        if !(self.nvc_flat_factor > 0.0 && self.nvc_flat_factor <= 100.0) {
+            return Err(MethodError::InvalidParameter {
+                name: "nvc_flat_factor".into(),
+                message: format!("must be in (0, 100], got {}", self.nvc_flat_factor),
+            });
+        }
+        if !(1..=2).contains(&self.nvc_range) {
+            return Err(MethodError::InvalidParameter {
+                name: "nvc_range".into(),
+                message: format!("must be 1 or 2 rings, got {}", self.nvc_range),
             });
         }
         if self.genus.is_some_and(|g| g > 1_000_000) {
@@ -197,6 +279,36 @@ pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
         "max_fold",
         "deg",
         "deviation: rebuild umbrellas folding back by more than this angle (0 = thesis)",
+    ),
+    (
+        "nvc",
+        "",
+        "Algorithm C (ch. 5) normal vector cones: off, generic (pi/4), flatness, flat-only",
+    ),
+    (
+        "nvc_angle",
+        "deg",
+        "generic cone angle (45 = pi/4); also the clamp of the flatness cone (C-02)",
+    ),
+    (
+        "nvc_flat_factor",
+        "",
+        "flatness cone = this x mean dihedral angle of matched edges (2 = thesis)",
+    ),
+    (
+        "nvc_range",
+        "count",
+        "limitation range in umbrella rings: 1 or 2 (thesis: 2)",
+    ),
+    (
+        "nvc_start",
+        "",
+        "C-06: NVC from the first update (first) or after plain UFM stagnates",
+    ),
+    (
+        "nvc_level",
+        "",
+        "C-05: NVC level in the key: top (thesis) or below-class (inside a class)",
     ),
     (
         "reorder",
