@@ -101,27 +101,29 @@ impl Mesher<'_> {
         let xr2 = xr * xr;
         let (cand, xs) = (&mut self.cand, &mut self.xs);
         let (e_a, e_b, fin, fout) = (&self.e_a, &self.e_b, &self.fin, &self.fout);
-        self.fidx.for_near(o, xr, |v| {
-            let d2 = (pts[v as usize] - o).length_squared();
-            if d2 > xr2 {
-                return;
-            }
-            if d2 <= r2 && v != a && v != b {
-                cand.push(Cand {
-                    t: v,
-                    score: 0.0,
-                    n_new: DVec3::ZERO,
-                });
-            }
-            let out = fout[v as usize];
-            if out != NONE && out != e {
-                xs.push((v, e_b[out as usize]));
-            }
-            let inn = fin[v as usize];
-            if inn != NONE && inn != e {
-                let u = e_a[inn as usize];
-                if (pts[u as usize] - o).length_squared() > xr2 {
-                    xs.push((u, v));
+        self.fidx.for_near(o, xr, |ids, pos| {
+            for (&v, &pv) in ids.iter().zip(pos) {
+                let d2 = (pv - o).length_squared();
+                if d2 > xr2 {
+                    continue;
+                }
+                if d2 <= r2 && v != a && v != b {
+                    cand.push(Cand {
+                        t: v,
+                        score: 0.0,
+                        n_new: DVec3::ZERO,
+                    });
+                }
+                let out = fout[v as usize];
+                if out != NONE && out != e {
+                    xs.push((v, e_b[out as usize]));
+                }
+                let inn = fin[v as usize];
+                if inn != NONE && inn != e {
+                    let u = e_a[inn as usize];
+                    if (pts[u as usize] - o).length_squared() > xr2 {
+                        xs.push((u, v));
+                    }
                 }
             }
         });
