@@ -145,8 +145,25 @@ pub(crate) fn crosses_projected(
 /// front: a fold the edge-crossing test cannot see when the whole front piece lies
 /// inside the triangle.
 pub(crate) fn front_inside_projected(xp: &[XProj], tri: [u32; 3], t2: [[f64; 2]; 3]) -> bool {
-    xp.iter()
-        .any(|e| e.near_x && !tri.contains(&e.x) && inside_2d(t2, e.p))
+    // A point strictly inside the triangle lies inside its bounding box: the box test
+    // rejects most front vertices before the three orientation tests.
+    let lo = [
+        t2[0][0].min(t2[1][0]).min(t2[2][0]),
+        t2[0][1].min(t2[1][1]).min(t2[2][1]),
+    ];
+    let hi = [
+        t2[0][0].max(t2[1][0]).max(t2[2][0]),
+        t2[0][1].max(t2[1][1]).max(t2[2][1]),
+    ];
+    xp.iter().any(|e| {
+        e.p[0] >= lo[0]
+            && e.p[0] <= hi[0]
+            && e.p[1] >= lo[1]
+            && e.p[1] <= hi[1]
+            && e.near_x
+            && !tri.contains(&e.x)
+            && inside_2d(t2, e.p)
+    })
 }
 
 /// True when `q` lies strictly inside the 2-D triangle `tri` (either orientation).
