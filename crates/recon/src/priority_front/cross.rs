@@ -108,27 +108,42 @@ pub(crate) fn project(
     }
 }
 
-/// [`crosses`] on edges projected by [`project`]: true when a tentative edge
+/// [`crosses`] on edges projected by [`project`]: true when one of the two tentative edges
 /// `(s0, p0, s1, p1)` (ids and projected endpoints) properly crosses a projected front
 /// edge. Front edges sharing an endpoint with the tentative edge, and those with both
 /// endpoints farther than `r` from the plane, are skipped; a bounding-box test comes
 /// before the orientation tests.
 pub(crate) fn crosses_projected(
     xp: &[XProj],
-    new_edges: &[(u32, [f64; 2], u32, [f64; 2])],
+    new_edges: [(u32, [f64; 2], u32, [f64; 2]); 2],
 ) -> bool {
-    for &(s0, p0, s1, p1) in new_edges {
-        let (lo0, hi0) = (p0[0].min(p1[0]), p0[0].max(p1[0]));
-        let (lo1, hi1) = (p0[1].min(p1[1]), p0[1].max(p1[1]));
-        for e in xp {
-            if e.p[0].max(e.q[0]) < lo0
-                || e.p[0].min(e.q[0]) > hi0
-                || e.p[1].max(e.q[1]) < lo1
-                || e.p[1].min(e.q[1]) > hi1
+    // Per new edge: its ids and bounding box. The box test is written with plain
+    // comparisons (`max(p, q) < lo` as `p < lo && q < lo`): `f64::max` / `min` carry
+    // NaN handling that costs several instructions each, and this is the innermost loop
+    // of the validation. One pass over the front edges tests both new edges.
+    let nb = new_edges.map(|(s0, p0, s1, p1)| {
+        (
+            s0,
+            p0,
+            s1,
+            p1,
+            [p0[0].min(p1[0]), p0[1].min(p1[1])],
+            [p0[0].max(p1[0]), p0[1].max(p1[1])],
+        )
+    });
+    for e in xp {
+        if !e.near {
+            continue;
+        }
+        for &(s0, p0, s1, p1, lo, hi) in &nb {
+            if (e.p[0] < lo[0] && e.q[0] < lo[0])
+                || (e.p[0] > hi[0] && e.q[0] > hi[0])
+                || (e.p[1] < lo[1] && e.q[1] < lo[1])
+                || (e.p[1] > hi[1] && e.q[1] > hi[1])
             {
                 continue;
             }
-            if !e.near || e.x == s0 || e.x == s1 || e.y == s0 || e.y == s1 {
+            if e.x == s0 || e.x == s1 || e.y == s0 || e.y == s1 {
                 continue;
             }
             if proper(p0, p1, e.p, e.q) {

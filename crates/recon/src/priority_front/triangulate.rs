@@ -456,7 +456,7 @@ impl Mesher<'_> {
             [q.dot(u), q.dot(v)]
         };
         let (qa, qt, qb) = (pr(a), pr(t), pr(b));
-        if crosses_projected(&self.xp, &[(a, qa, t, qt), (t, qt, b, qb)]) {
+        if crosses_projected(&self.xp, [(a, qa, t, qt), (t, qt, b, qb)]) {
             self.stats.cross_rejects += 1;
             return None;
         }
