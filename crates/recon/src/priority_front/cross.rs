@@ -94,18 +94,19 @@ pub(crate) fn project(
     out: &mut Vec<XProj>,
 ) {
     out.clear();
-    for &(x, y) in xs {
+    // `extend` over an exact-size iterator reserves once (no per-edge capacity check).
+    out.extend(xs.iter().map(|&(x, y)| {
         let (px, py) = (pts[x as usize] - o, pts[y as usize] - o);
         let near_x = px.dot(n).abs() <= r;
-        out.push(XProj {
+        XProj {
             x,
             y,
             p: [px.dot(u), px.dot(v)],
             q: [py.dot(u), py.dot(v)],
             near_x,
             near: near_x || py.dot(n).abs() <= r,
-        });
-    }
+        }
+    }));
 }
 
 /// [`crosses`] on edges projected by [`project`]: true when one of the two tentative edges
