@@ -480,11 +480,11 @@ impl FrontIndex {
         self.chunk[i as usize] = NONE;
     }
 
-    /// Calls `f(ids, positions)` with the listed points of the buckets meeting the cube
-    /// `[o - r, o + r]`, one chunk (two equal-length slices) at a time, in no particular
-    /// order. Slices keep the caller's scan loop tight (few live registers).
-    #[inline]
-    pub fn for_near(&self, o: DVec3, r: f64, mut f: impl FnMut(&[u32], &[DVec3])) {
+    /// Collects into `out` (cleared) the chunks holding the listed points of the buckets
+    /// meeting the cube `[o - r, o + r]`; [`FrontIndex::chunk`] reads them. Lets the
+    /// caller scan them in a plain loop over locals (no closure captures).
+    pub fn chunks_near(&self, o: DVec3, r: f64, out: &mut Vec<u32>) {
+        out.clear();
         let Some(q) = self.lat.cube(o, r) else {
             return;
         };
@@ -493,14 +493,21 @@ impl FrontIndex {
                 for x in q[0][0]..=q[0][1] {
                     let mut c = self.head(self.bucket_of([x, y, z]));
                     while c != NONE {
-                        let k = &self.pool[c as usize];
-                        let l = k.len as usize;
-                        f(&k.ids[..l], &k.pos[..l]);
-                        c = k.next;
+                        out.push(c);
+                        c = self.pool[c as usize].next;
                     }
                 }
             }
         }
+    }
+
+    /// The ids and positions of the listed points of chunk `c` (from
+    /// [`FrontIndex::chunks_near`]).
+    #[inline]
+    pub fn chunk(&self, c: u32) -> (&[u32], &[DVec3]) {
+        let k = &self.pool[c as usize];
+        let l = k.len as usize;
+        (&k.ids[..l], &k.pos[..l])
     }
 }
 
@@ -535,7 +542,10 @@ mod tests {
                 let o = DVec3::new(rng.random(), rng.random(), 0.05);
                 let r = 0.1;
                 let mut got = Vec::new();
-                fi.for_near(o, r, |ids, pos| {
+                let mut chunks = Vec::new();
+                fi.chunks_near(o, r, &mut chunks);
+                for &c in &chunks {
+                    let (ids, pos) = fi.chunk(c);
                     for (&v, &p) in ids.iter().zip(pos) {
                         assert_eq!(p, pts[v as usize]);
                         assert!(listed[v as usize]);
@@ -543,7 +553,7 @@ mod tests {
                             got.push(v);
                         }
                     }
-                });
+                }
                 got.sort_unstable();
                 let want: Vec<u32> = (0..pts.len() as u32)
                     .filter(|&v| listed[v as usize] && (pts[v as usize] - o).length() <= r)

@@ -143,6 +143,8 @@ pub(crate) struct Mesher<'g> {
     /// Pending candidates `(score bound, point)` of the lazy evaluation (scratch).
     pub pend: Vec<(f64, u32)>,
     pub xs: Vec<(u32, u32)>,
+    /// Front-index chunks near the popped edge (scratch).
+    pub chunks: Vec<u32>,
     /// `xs` projected into the current validation plane (scratch).
     pub xp: Vec<XProj>,
     pub stats: Stats,
@@ -203,6 +205,7 @@ impl<'g> Mesher<'g> {
             free_near: Vec::new(),
             pend: Vec::new(),
             xs: Vec::new(),
+            chunks: Vec::new(),
             xp: Vec::new(),
             stats: Stats::default(),
             revisiting: false,

@@ -86,12 +86,17 @@ impl Mesher<'_> {
         let r = self.cfg.r;
         let r2 = r * r;
         let w = self.cfg.w;
-        self.free_near.clear();
-        self.pend.clear();
-        self.xs.clear();
+        // The output lists are moved into locals for the scans: the loops then keep
+        // their lengths in registers (the scans were dominated by push bookkeeping).
+        let mut free_near = std::mem::take(&mut self.free_near);
+        let mut pend = std::mem::take(&mut self.pend);
+        let mut xs = std::mem::take(&mut self.xs);
+        let mut chunks = std::mem::take(&mut self.chunks);
+        free_near.clear();
+        pend.clear();
+        xs.clear();
         let pts = self.pts;
         let state = &self.state;
-        let (free_near, pend) = (&mut self.free_near, &mut self.pend);
         self.grid.for_cells(o, r, |range| {
             for i in range {
                 if state[i] == FREE {
@@ -105,9 +110,10 @@ impl Mesher<'_> {
         });
         let xr = self.cfg.cross_factor * r;
         let xr2 = xr * xr;
-        let xs = &mut self.xs;
         let (e_a, e_b, fin, fout) = (&self.e_a, &self.e_b, &self.fin, &self.fout);
-        self.fidx.for_near(o, xr, |ids, pos| {
+        self.fidx.chunks_near(o, xr, &mut chunks);
+        for &c in &chunks {
+            let (ids, pos) = self.fidx.chunk(c);
             for (&v, &pv) in ids.iter().zip(pos) {
                 let d2 = (pv - o).length_squared();
                 if d2 > xr2 {
@@ -128,7 +134,11 @@ impl Mesher<'_> {
                     }
                 }
             }
-        });
+        }
+        self.free_near = free_near;
+        self.pend = pend;
+        self.xs = xs;
+        self.chunks = chunks;
     }
 
     /// During revisit passes (IMPL-CHOICE I2/I3) the front neighbours `z` (`z -> a`)
