@@ -113,11 +113,28 @@ impl Mesher<'_> {
         let mut zipped = 0;
         loop {
             let loops = self.loops();
+            // Bounding boxes: a qualifying pair has each box inside the other's grown by
+            // the gap (a necessary condition that prunes the pairs in O(1) each).
+            let boxes: Vec<(DVec3, DVec3)> = loops
+                .iter()
+                .map(|l| {
+                    l.iter().fold(
+                        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                        |(lo, hi), &v| (lo.min(self.pts[v as usize]), hi.max(self.pts[v as usize])),
+                    )
+                })
+                .collect();
+            let inside = |a: (DVec3, DVec3), b: (DVec3, DVec3)| {
+                a.0.cmpge(b.0 - gap).all() && a.1.cmple(b.1 + gap).all()
+            };
             let mut done = false;
             'pairs: for i in 0..loops.len() {
                 for j in i + 1..loops.len() {
                     let (l1, l2) = (&loops[i], &loops[j]);
                     if l1.len() < 3 || l2.len() < 3 || l1.len() > 4096 || l2.len() > 4096 {
+                        continue;
+                    }
+                    if !inside(boxes[i], boxes[j]) || !inside(boxes[j], boxes[i]) {
                         continue;
                     }
                     if !self.parallel(l1, l2, gap) || !self.parallel(l2, l1, gap) {
