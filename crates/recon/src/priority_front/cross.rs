@@ -81,8 +81,10 @@ pub(crate) struct XProj {
 }
 
 /// Projects the front edges `xs` into the plane through `o` with orthonormal basis
-/// `(u, v)` and unit normal `n` (into `out`, reused).
+/// `(u, v)` and unit normal `n` into the first `xs.len()` entries of `out` (reused; it
+/// only grows, so the hot path has no capacity checks and no out-of-line `Vec` code).
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub(crate) fn project(
     pts: &[DVec3],
     xs: &[(u32, u32)],
@@ -93,20 +95,31 @@ pub(crate) fn project(
     r: f64,
     out: &mut Vec<XProj>,
 ) {
-    out.clear();
-    // `extend` over an exact-size iterator reserves once (no per-edge capacity check).
-    out.extend(xs.iter().map(|&(x, y)| {
+    if out.len() < xs.len() {
+        out.resize(
+            xs.len(),
+            XProj {
+                x: 0,
+                y: 0,
+                p: [0.0; 2],
+                q: [0.0; 2],
+                near_x: false,
+                near: false,
+            },
+        );
+    }
+    for (slot, &(x, y)) in out.iter_mut().zip(xs) {
         let (px, py) = (pts[x as usize] - o, pts[y as usize] - o);
         let near_x = px.dot(n).abs() <= r;
-        XProj {
+        *slot = XProj {
             x,
             y,
             p: [px.dot(u), px.dot(v)],
             q: [py.dot(u), py.dot(v)],
             near_x,
             near: near_x || py.dot(n).abs() <= r,
-        }
-    }));
+        };
+    }
 }
 
 /// [`crosses`] on edges projected by [`project`]: true when one of the two tentative edges

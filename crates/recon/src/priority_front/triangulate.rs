@@ -465,13 +465,13 @@ impl Mesher<'_> {
             [q.dot(u), q.dot(v)]
         };
         let (qa, qt, qb) = (pr(a), pr(t), pr(b));
-        if crosses_projected(&self.xp, [(a, qa, t, qt), (t, qt, b, qb)]) {
+        let xp = &self.xp[..self.xs.len()];
+        if crosses_projected(xp, [(a, qa, t, qt), (t, qt, b, qb)]) {
             self.stats.cross_rejects += 1;
             return None;
         }
         // IMPL-CHOICE I6: no front vertex may lie inside the new triangle (a fold).
-        if self.cfg.front_inside_check && front_inside_projected(&self.xp, [a, t, b], [qa, qt, qb])
-        {
+        if self.cfg.front_inside_check && front_inside_projected(xp, [a, t, b], [qa, qt, qb]) {
             self.stats.cross_rejects += 1;
             return None;
         }
