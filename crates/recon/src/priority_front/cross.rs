@@ -81,8 +81,10 @@ pub(crate) struct XProj {
 }
 
 /// Projects the front edges `xs` into the plane through `o` with orthonormal basis
-/// `(u, v)` and unit normal `n` (into `out`, reused).
+/// `(u, v)` and unit normal `n` into the first `xs.len()` entries of `out` (reused; it
+/// only grows, so the hot path has no capacity checks and no out-of-line `Vec` code).
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub(crate) fn project(
     pts: &[DVec3],
     xs: &[(u32, u32)],
@@ -93,42 +95,69 @@ pub(crate) fn project(
     r: f64,
     out: &mut Vec<XProj>,
 ) {
-    out.clear();
-    for &(x, y) in xs {
+    if out.len() < xs.len() {
+        out.resize(
+            xs.len(),
+            XProj {
+                x: 0,
+                y: 0,
+                p: [0.0; 2],
+                q: [0.0; 2],
+                near_x: false,
+                near: false,
+            },
+        );
+    }
+    for (slot, &(x, y)) in out.iter_mut().zip(xs) {
         let (px, py) = (pts[x as usize] - o, pts[y as usize] - o);
         let near_x = px.dot(n).abs() <= r;
-        out.push(XProj {
+        *slot = XProj {
             x,
             y,
             p: [px.dot(u), px.dot(v)],
             q: [py.dot(u), py.dot(v)],
             near_x,
             near: near_x || py.dot(n).abs() <= r,
-        });
+        };
     }
 }
 
-/// [`crosses`] on edges projected by [`project`]: true when a tentative edge
+/// [`crosses`] on edges projected by [`project`]: true when one of the two tentative edges
 /// `(s0, p0, s1, p1)` (ids and projected endpoints) properly crosses a projected front
 /// edge. Front edges sharing an endpoint with the tentative edge, and those with both
 /// endpoints farther than `r` from the plane, are skipped; a bounding-box test comes
 /// before the orientation tests.
 pub(crate) fn crosses_projected(
     xp: &[XProj],
-    new_edges: &[(u32, [f64; 2], u32, [f64; 2])],
+    new_edges: [(u32, [f64; 2], u32, [f64; 2]); 2],
 ) -> bool {
-    for &(s0, p0, s1, p1) in new_edges {
-        let (lo0, hi0) = (p0[0].min(p1[0]), p0[0].max(p1[0]));
-        let (lo1, hi1) = (p0[1].min(p1[1]), p0[1].max(p1[1]));
-        for e in xp {
-            if e.p[0].max(e.q[0]) < lo0
-                || e.p[0].min(e.q[0]) > hi0
-                || e.p[1].max(e.q[1]) < lo1
-                || e.p[1].min(e.q[1]) > hi1
+    // Per new edge: its ids and bounding box. The box test is written with plain
+    // comparisons (`max(p, q) < lo` as `p < lo && q < lo`): `f64::max` / `min` carry
+    // NaN handling that costs several instructions each, and this is the innermost loop
+    // of the validation. One pass over the front edges tests both new edges.
+    let nb = new_edges.map(|(s0, p0, s1, p1)| {
+        (
+            s0,
+            p0,
+            s1,
+            p1,
+            [p0[0].min(p1[0]), p0[1].min(p1[1])],
+            [p0[0].max(p1[0]), p0[1].max(p1[1])],
+        )
+    });
+    for e in xp {
+        if !e.near {
+            continue;
+        }
+        for &(s0, p0, s1, p1, lo, hi) in &nb {
+            if (e.p[0] < lo[0] && e.q[0] < lo[0])
+                || (e.p[0] > hi[0] && e.q[0] > hi[0])
+                || (e.p[1] < lo[1] && e.q[1] < lo[1])
+                || (e.p[1] > hi[1] && e.q[1] > hi[1])
             {
                 continue;
             }
-            if !e.near || e.x == s0 || e.x == s1 || e.y == s0 || e.y == s1 {
+            if e.x == s0 || e.x == s1 || e.y == s0 || e.y == s1 {
                 continue;
             }
             if proper(p0, p1, e.p, e.q) {
@@ -145,8 +174,25 @@ pub(crate) fn crosses_projected(
 /// front: a fold the edge-crossing test cannot see when the whole front piece lies
 /// inside the triangle.
 pub(crate) fn front_inside_projected(xp: &[XProj], tri: [u32; 3], t2: [[f64; 2]; 3]) -> bool {
-    xp.iter()
-        .any(|e| e.near_x && !tri.contains(&e.x) && inside_2d(t2, e.p))
+    // A point strictly inside the triangle lies inside its bounding box: the box test
+    // rejects most front vertices before the three orientation tests.
+    let lo = [
+        t2[0][0].min(t2[1][0]).min(t2[2][0]),
+        t2[0][1].min(t2[1][1]).min(t2[2][1]),
+    ];
+    let hi = [
+        t2[0][0].max(t2[1][0]).max(t2[2][0]),
+        t2[0][1].max(t2[1][1]).max(t2[2][1]),
+    ];
+    xp.iter().any(|e| {
+        e.p[0] >= lo[0]
+            && e.p[0] <= hi[0]
+            && e.p[1] >= lo[1]
+            && e.p[1] <= hi[1]
+            && e.near_x
+            && !tri.contains(&e.x)
+            && inside_2d(t2, e.p)
+    })
 }
 
 /// True when `q` lies strictly inside the 2-D triangle `tri` (either orientation).

@@ -97,3 +97,151 @@ fn min_angle_cos(p: DVec3, q: DVec3, r: DVec3) -> f64 {
     }
     a.max(b).max(cc)
 }
+
+impl Mesher<'_> {
+    /// Zips pairs of parallel front loops left along a slab cut by the multi-threaded
+    /// stitch (IMPL-CHOICE I9, not in the paper; `stitch_zip`). Two loops qualify when
+    /// each vertex of either lies within `2 R` of the other loop, and these offsets lie
+    /// mostly in the tangent plane (|offset . fan normal| <= offset / 2: side by side
+    /// on the surface, not two stacked sheets). The pair is bridged by the two triangles
+    /// of the quad between the closest pair of facing, antiparallel edges (a GLUE, which
+    /// merges the loops into one thin ring-shaped loop), and that loop is then closed by
+    /// the ear clipping of I7 (each ear a LINK, the last a FILL; a diagonal that is a
+    /// mesh edge already is never added). Returns the number of pairs zipped.
+    pub fn zip_parallel_loops(&mut self) -> u64 {
+        let gap = 2.0 * self.cfg.r;
+        let mut zipped = 0;
+        loop {
+            let loops = self.loops();
+            // Bounding boxes: a qualifying pair has each box inside the other's grown by
+            // the gap (a necessary condition that prunes the pairs in O(1) each).
+            let boxes: Vec<(DVec3, DVec3)> = loops
+                .iter()
+                .map(|l| {
+                    l.iter().fold(
+                        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                        |(lo, hi), &v| (lo.min(self.pts[v as usize]), hi.max(self.pts[v as usize])),
+                    )
+                })
+                .collect();
+            let inside = |a: (DVec3, DVec3), b: (DVec3, DVec3)| {
+                a.0.cmpge(b.0 - gap).all() && a.1.cmple(b.1 + gap).all()
+            };
+            let mut done = false;
+            'pairs: for i in 0..loops.len() {
+                for j in i + 1..loops.len() {
+                    let (l1, l2) = (&loops[i], &loops[j]);
+                    if l1.len() < 3 || l2.len() < 3 || l1.len() > 4096 || l2.len() > 4096 {
+                        continue;
+                    }
+                    if !inside(boxes[i], boxes[j]) || !inside(boxes[j], boxes[i]) {
+                        continue;
+                    }
+                    if !self.parallel(l1, l2, gap) || !self.parallel(l2, l1, gap) {
+                        continue;
+                    }
+                    if let Some(m) = self.bridge(l1, l2) {
+                        // The merged loop: ear-clip it whole (no length limit).
+                        let merged = self.loop_from(m);
+                        if self.clip_loop(merged) {
+                            zipped += 1;
+                        }
+                        done = true;
+                        break 'pairs;
+                    }
+                }
+            }
+            if !done {
+                return zipped;
+            }
+        }
+    }
+
+    /// True when every vertex of `l1` has a vertex of `l2` within `gap`, the nearest one
+    /// offset mostly along the surface (see [`Mesher::zip_parallel_loops`]).
+    fn parallel(&self, l1: &[u32], l2: &[u32], gap: f64) -> bool {
+        let g2 = gap * gap;
+        l1.iter().all(|&p| {
+            let pp = self.pts[p as usize];
+            let mut best = (f64::INFINITY, DVec3::ZERO);
+            for &q in l2 {
+                let d = self.pts[q as usize] - pp;
+                let l = d.length_squared();
+                if l < best.0 {
+                    best = (l, d);
+                }
+            }
+            let n = self.vn[p as usize].normalize_or_zero();
+            best.0 <= g2 && n != DVec3::ZERO && {
+                let h = best.1.dot(n);
+                4.0 * h * h <= best.0
+            }
+        })
+    }
+
+    /// Bridges loops `l1`, `l2` by the quad between the closest (by midpoints) pair of
+    /// antiparallel front edges `a -> b` of `l1` and `q -> p` of `l2`: triangles
+    /// `(a, p, b)` and `(p, q, b)` as one GLUE. Returns a vertex of the merged loop, or
+    /// `None` when no pair passes (shared edges, degenerate or folded triangles).
+    fn bridge(&mut self, l1: &[u32], l2: &[u32]) -> Option<u32> {
+        let mut best: Option<(f64, u32, u32)> = None;
+        for &a in l1 {
+            let e = self.fout[a as usize];
+            let b = self.e_b[e as usize];
+            let (pa, pb) = (self.pts[a as usize], self.pts[b as usize]);
+            for &q in l2 {
+                let f = self.fout[q as usize];
+                let p = self.e_b[f as usize];
+                let (pq, pp) = (self.pts[q as usize], self.pts[p as usize]);
+                if (pb - pa).dot(pp - pq) >= 0.0 {
+                    continue;
+                }
+                let d = ((pa + pb) - (pq + pp)).length_squared();
+                if best.is_none_or(|(bd, _, _)| d < bd)
+                    && !self.adj.has(a, p)
+                    && !self.adj.has(p, b)
+                    && !self.adj.has(q, b)
+                {
+                    let n1 = super::mesher::tri_normal(pa, pp, pb);
+                    let n2 = super::mesher::tri_normal(pp, pq, pb);
+                    // Both halves of the quad face the same way as their old sides.
+                    if n1.dot(self.e_nrm[e as usize]) > 0.0
+                        && n2.dot(self.e_nrm[f as usize]) > 0.0
+                        && n1.dot(n2) > 0.0
+                    {
+                        best = Some((d, e, p));
+                    }
+                }
+            }
+        }
+        let (_, e, p) = best?;
+        let a = self.e_a[e as usize];
+        let (b, q) = (
+            self.e_b[e as usize],
+            self.e_a[self.fin[p as usize] as usize],
+        );
+        let n1 = super::mesher::tri_normal(
+            self.pts[a as usize],
+            self.pts[p as usize],
+            self.pts[b as usize],
+        );
+        let n2 = super::mesher::tri_normal(
+            self.pts[p as usize],
+            self.pts[q as usize],
+            self.pts[b as usize],
+        );
+        self.glue(e, p, n1, n2);
+        Some(a)
+    }
+
+    /// The vertices of the live front loop through vertex `v`, in front order.
+    fn loop_from(&self, v: u32) -> Vec<u32> {
+        let mut l = vec![v];
+        let mut e = self.fout[v as usize];
+        while self.e_b[e as usize] != v && l.len() <= self.e_a.len() {
+            l.push(self.e_b[e as usize]);
+            e = self.e_next[e as usize];
+        }
+        l
+    }
+}

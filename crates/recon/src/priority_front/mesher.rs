@@ -143,6 +143,8 @@ pub(crate) struct Mesher<'g> {
     /// Pending candidates `(score bound, point)` of the lazy evaluation (scratch).
     pub pend: Vec<(f64, u32)>,
     pub xs: Vec<(u32, u32)>,
+    /// Front-index chunks near the popped edge (scratch).
+    pub chunks: Vec<u32>,
     /// `xs` projected into the current validation plane (scratch).
     pub xp: Vec<XProj>,
     pub stats: Stats,
@@ -203,6 +205,7 @@ impl<'g> Mesher<'g> {
             free_near: Vec::new(),
             pend: Vec::new(),
             xs: Vec::new(),
+            chunks: Vec::new(),
             xp: Vec::new(),
             stats: Stats::default(),
             revisiting: false,
@@ -231,6 +234,7 @@ impl<'g> Mesher<'g> {
 
     /// Pushes live edge `e` onto the heap with cost `t`.
     // ASSUMPTION A3: ties of T are broken by a FIFO insertion counter (determinism).
+    #[inline]
     pub fn push(&mut self, e: u32, t: f64) {
         self.fifo += 1;
         let bits = t.max(0.0).to_bits();
@@ -239,6 +243,7 @@ impl<'g> Mesher<'g> {
     }
 
     /// Pops the cheapest live edge (lazy deletion: stale entries are skipped).
+    #[inline]
     pub fn pop(&mut self) -> Option<u32> {
         while let Some(Reverse((_, _, e, stamp))) = self.heap.pop() {
             if self.e_alive[e as usize] && self.e_stamp[e as usize] == stamp {
@@ -277,6 +282,7 @@ impl<'g> Mesher<'g> {
 
     /// Creates front edge `a -> b` whose incident triangle has unit normal `nrm`; it is
     /// not linked into a loop yet.
+    #[inline]
     fn new_edge(&mut self, a: u32, b: u32, nrm: DVec3, t: f64, push: bool) -> u32 {
         let e = if let Some(e) = self.free_slots.pop() {
             let i = e as usize;
@@ -307,6 +313,7 @@ impl<'g> Mesher<'g> {
         e
     }
 
+    #[inline]
     fn kill_edge(&mut self, e: u32) {
         let i = e as usize;
         debug_assert!(self.e_alive[i]);
@@ -329,6 +336,7 @@ impl<'g> Mesher<'g> {
     }
 
     /// Removes `v` from the front bookkeeping when it has no front edge left.
+    #[inline]
     fn retire_if_interior(&mut self, v: u32) {
         if self.fin[v as usize] == NONE && self.fout[v as usize] == NONE {
             self.fidx.remove(v);
@@ -358,6 +366,7 @@ impl<'g> Mesher<'g> {
     }
 
     /// JOIN (§4.5.1): `p` was Free.
+    #[inline]
     pub fn join(&mut self, e: u32, p: u32, n_new: DVec3) {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let t = cost(n_new, self.e_nrm[e as usize]);
@@ -378,6 +387,7 @@ impl<'g> Mesher<'g> {
     }
 
     /// FILL (§4.5.2): the loop is the triangle `a -> b -> p -> a`.
+    #[inline]
     pub fn fill(&mut self, e: u32, p: u32) {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let bp = self.fout[b as usize];
@@ -393,6 +403,7 @@ impl<'g> Mesher<'g> {
     }
 
     /// LINK-next (§4.5.3): `b -> p` is a front edge.
+    #[inline]
     pub fn link_next(&mut self, e: u32, p: u32, n_new: DVec3) {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let t = cost(n_new, self.e_nrm[e as usize]);
@@ -411,6 +422,7 @@ impl<'g> Mesher<'g> {
 
     /// LINK-prev (§4.5.3, ASSUMPTION A16 — the mirror of the paper's link): `p -> a` is
     /// a front edge.
+    #[inline]
     pub fn link_prev(&mut self, e: u32, p: u32, n_new: DVec3) {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let t = cost(n_new, self.e_nrm[e as usize]);
@@ -429,6 +441,7 @@ impl<'g> Mesher<'g> {
 
     /// GLUE (§4.5.4) with the repair triangle `(p, q, b)`, `q -> p` the front
     /// predecessor edge of `p`; `n2` is the repair triangle's normal.
+    #[inline]
     pub fn glue(&mut self, e: u32, p: u32, n_new: DVec3, n2: DVec3) {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let t1 = cost(n_new, self.e_nrm[e as usize]);
@@ -455,6 +468,7 @@ impl<'g> Mesher<'g> {
 
     /// Mirrored GLUE repair (ASSUMPTION A17): second triangle `(a, y, p)`, `p -> y` the
     /// front successor edge of `p`; `n2` is its normal.
+    #[inline]
     pub fn glue_mirror(&mut self, e: u32, p: u32, n_new: DVec3, n2: DVec3) {
         let (a, b) = (self.e_a[e as usize], self.e_b[e as usize]);
         let t1 = cost(n_new, self.e_nrm[e as usize]);

@@ -244,6 +244,9 @@ impl Reconstructor for PriorityFront {
             // Restarts over the whole cloud for what the slabs left.
             m.restarts(&dcfg, &mut rng, ctx)?;
             m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
+            if p.stitch_zip {
+                m.stats.holes_closed += m.zip_parallel_loops();
+            }
             end_phase(ctx, "stitch", t_st);
             Grown {
                 loops: m.loops(),
@@ -310,7 +313,7 @@ impl Reconstructor for PriorityFront {
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I8=support:k{},share{},tol{}rho,r{}R cross={}R free_inside={} I6=front_inside:{} I7=close<={} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I8=support:k{},share{},tol{}rho,r{}R cross={}R free_inside={} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -333,6 +336,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.reject_free_inside,
         p.front_inside_check,
         p.close_holes_max,
+        p.stitch_zip,
         p.threads
     )
 }

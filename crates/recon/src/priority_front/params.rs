@@ -116,6 +116,9 @@ pub struct PriorityFrontParams {
     /// Slab stitch (threads > 1): grow each Free band from the even-numbered slab's
     /// front first, then all fronts (default true); false = all fronts at once.
     pub stitch_one_sided: bool,
+    /// Slab stitch (threads > 1): zip pairs of parallel front loops left along a cut
+    /// (IMPL-CHOICE I9; default true).
+    pub stitch_zip: bool,
     /// Search radius of the I8 neighbours, in units of R (default 2; all
     /// `support_neighbours` must lie within it, so an outlier in the volume fails).
     pub support_radius: f64,
@@ -177,6 +180,7 @@ impl Default for PriorityFrontParams {
             support_share: 0.5,
             support_radius: 2.0,
             stitch_one_sided: true,
+            stitch_zip: true,
             close_holes_max: 10,
             restart: true,
             restart_min_points: 10,
@@ -403,6 +407,11 @@ pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
         "stitch_one_sided",
         "",
         "threads > 1: sweep each slab band from one side first (true)",
+    ),
+    (
+        "stitch_zip",
+        "",
+        "threads > 1: zip pairs of parallel front loops left along a slab cut (I9: true)",
     ),
     (
         "support_radius",

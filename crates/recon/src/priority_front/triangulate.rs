@@ -78,74 +78,87 @@ impl Mesher<'_> {
         Some(cr)
     }
 
-    /// Step 1: gathers Free points within R of `o` into `free_near`, front points
-    /// within R (but `a`, `b`) into `cand` (score filled in later), and the front edges
-    /// near `o` for the crossing test into `xs`.
+    /// Step 1: gathers the candidates, Free points and front points (but `a`, `b`)
+    /// within R of `o`, into `pend` with their score bounds (from the distance to `o`;
+    /// the caller recomputes them for the segment distance), the Free ones also into
+    /// `free_near`, and the front edges near `o` for the crossing test into `xs`.
     fn gather(&mut self, e: u32, a: u32, b: u32, o: DVec3) {
         let r = self.cfg.r;
         let r2 = r * r;
-        self.free_near.clear();
-        self.cand.clear();
-        self.xs.clear();
+        let w = self.cfg.w;
+        // The output lists are moved into locals for the scans: the loops then keep
+        // their lengths in registers (the scans were dominated by push bookkeeping).
+        let mut free_near = std::mem::take(&mut self.free_near);
+        let mut pend = std::mem::take(&mut self.pend);
+        let mut xs = std::mem::take(&mut self.xs);
+        let mut chunks = std::mem::take(&mut self.chunks);
+        free_near.clear();
+        pend.clear();
+        xs.clear();
         let pts = self.pts;
         let state = &self.state;
-        let free_near = &mut self.free_near;
         self.grid.for_cells(o, r, |range| {
             for i in range {
-                if state[i] == FREE && (pts[i] - o).length_squared() <= r2 {
-                    free_near.push(i as u32);
+                if state[i] == FREE {
+                    let d2 = (pts[i] - o).length_squared();
+                    if d2 <= r2 {
+                        free_near.push(i as u32);
+                        pend.push((bound(w, r, d2.sqrt()), i as u32));
+                    }
                 }
             }
         });
         let xr = self.cfg.cross_factor * r;
         let xr2 = xr * xr;
-        let (cand, xs) = (&mut self.cand, &mut self.xs);
         let (e_a, e_b, fin, fout) = (&self.e_a, &self.e_b, &self.fin, &self.fout);
-        self.fidx.for_near(o, xr, |v| {
-            let d2 = (pts[v as usize] - o).length_squared();
-            if d2 > xr2 {
-                return;
-            }
-            if d2 <= r2 && v != a && v != b {
-                cand.push(Cand {
-                    t: v,
-                    score: 0.0,
-                    n_new: DVec3::ZERO,
-                });
-            }
-            let out = fout[v as usize];
-            if out != NONE && out != e {
-                xs.push((v, e_b[out as usize]));
-            }
-            let inn = fin[v as usize];
-            if inn != NONE && inn != e {
-                let u = e_a[inn as usize];
-                if (pts[u as usize] - o).length_squared() > xr2 {
-                    xs.push((u, v));
+        self.fidx.chunks_near(o, xr, &mut chunks);
+        for &c in &chunks {
+            let (ids, pos) = self.fidx.chunk(c);
+            for (&v, &pv) in ids.iter().zip(pos) {
+                let d2 = (pv - o).length_squared();
+                if d2 > xr2 {
+                    continue;
+                }
+                if d2 <= r2 && v != a && v != b {
+                    pend.push((bound(w, r, d2.sqrt()), v));
+                }
+                let out = fout[v as usize];
+                if out != NONE && out != e {
+                    xs.push((v, e_b[out as usize]));
+                }
+                let inn = fin[v as usize];
+                if inn != NONE && inn != e {
+                    let u = e_a[inn as usize];
+                    if (pts[u as usize] - o).length_squared() > xr2 {
+                        xs.push((u, v));
+                    }
                 }
             }
-        });
+        }
+        self.free_near = free_near;
+        self.pend = pend;
+        self.xs = xs;
+        self.chunks = chunks;
     }
 
     /// During revisit passes (IMPL-CHOICE I2/I3) the front neighbours `z` (`z -> a`)
     /// and `c` (`b -> c`) are candidates even beyond R (up to the crossing radius), so that large small-count holes
     /// (whose third vertex lies outside the ball) can still be linked / filled.
-    fn add_front_neighbours(&mut self, a: u32, b: u32) {
+    fn add_front_neighbours(&mut self, x: &EdgeCtx) {
+        let (a, b) = (x.a, x.b);
         let z = self.e_a[self.fin[a as usize] as usize];
         let c = self.e_b[self.fout[b as usize] as usize];
         let o = (self.pts[a as usize] + self.pts[b as usize]) * 0.5;
         let lim = self.cfg.cross_factor * self.cfg.r;
         for v in [z, c] {
+            // `pend` holds the front candidates within R (and Free points, never `v`).
             if v != a
                 && v != b
                 && (self.pts[v as usize] - o).length() <= lim
-                && !self.cand.iter().any(|x| x.t == v)
+                && !self.pend.iter().any(|&(_, t)| t == v)
             {
-                self.cand.push(Cand {
-                    t: v,
-                    score: 0.0,
-                    n_new: DVec3::ZERO,
-                });
+                let u = self.score_bound(x, v);
+                self.pend.push((u, v));
             }
         }
     }
@@ -342,8 +355,15 @@ impl Mesher<'_> {
             },
         };
         self.gather(e, a, b, o);
+        if self.cfg.seg_dist {
+            let mut pend = std::mem::take(&mut self.pend);
+            for c in pend.iter_mut() {
+                c.0 = self.score_bound(&x, c.1);
+            }
+            self.pend = pend;
+        }
         if self.revisiting {
-            self.add_front_neighbours(a, b);
+            self.add_front_neighbours(&x);
         }
         // Steps 2-4, lazily. Every candidate's score is bounded above by
         // U(t) = w1 + w2 + w3 (R - d(t))/R (cos beta, cos gamma <= 1), known from its
@@ -353,13 +373,6 @@ impl Mesher<'_> {
         // full evaluation (decreasing score, ties by lower index), but most candidates
         // of an edge are never evaluated, because the first validated one usually wins.
         let mut pend = std::mem::take(&mut self.pend);
-        pend.clear();
-        for c in &self.cand {
-            pend.push((self.score_bound(&x, c.t), c.t));
-        }
-        for &t in &self.free_near {
-            pend.push((self.score_bound(&x, t), t));
-        }
         self.cand.clear();
         let mut passed = 0usize;
         let mut result = None;
@@ -432,9 +445,7 @@ impl Mesher<'_> {
         } else {
             (pt - x.o).length()
         };
-        let w = self.cfg.w;
-        let u = w[0] + w[1] + w[2] * ((r - d) / r).max(0.0);
-        u + 1e-9 * (w[0] + w[1] + w[2])
+        bound(self.cfg.w, r, d)
     }
 
     /// Crossing test and classification of candidate `c` (§4.4 Step 4, §4.5).
@@ -454,13 +465,13 @@ impl Mesher<'_> {
             [q.dot(u), q.dot(v)]
         };
         let (qa, qt, qb) = (pr(a), pr(t), pr(b));
-        if crosses_projected(&self.xp, &[(a, qa, t, qt), (t, qt, b, qb)]) {
+        let xp = &self.xp[..self.xs.len()];
+        if crosses_projected(xp, [(a, qa, t, qt), (t, qt, b, qb)]) {
             self.stats.cross_rejects += 1;
             return None;
         }
         // IMPL-CHOICE I6: no front vertex may lie inside the new triangle (a fold).
-        if self.cfg.front_inside_check && front_inside_projected(&self.xp, [a, t, b], [qa, qt, qb])
-        {
+        if self.cfg.front_inside_check && front_inside_projected(xp, [a, t, b], [qa, qt, qb]) {
             self.stats.cross_rejects += 1;
             return None;
         }
@@ -638,6 +649,14 @@ impl Mesher<'_> {
         self.revisiting = false;
         Ok(())
     }
+}
+
+/// The score bound of [`Mesher::score_bound`] for distance `d` (weights `w`, radius
+/// `r`).
+#[inline]
+fn bound(w: [f64; 3], r: f64, d: f64) -> f64 {
+    let u = w[0] + w[1] + w[2] * ((r - d) / r).max(0.0);
+    u + 1e-9 * (w[0] + w[1] + w[2])
 }
 
 /// Clockwise angle from 2-D direction `s` to `d`, as a *pseudo-angle* in [0, 4): a
