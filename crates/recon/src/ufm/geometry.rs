@@ -78,18 +78,25 @@ pub fn max_fold(pts: &[DVec3], v: u32, ring: &[u32], buf: &mut Vec<f64>) -> f64 
     buf.iter().copied().fold(0.0, f64::max)
 }
 
+/// Test fixture: the origin and a regular unit hexagon around it in the plane z = 0
+/// (the umbrella ring is points 1..=6).
+#[cfg(test)]
+pub(crate) fn hexagon_fan() -> Vec<DVec3> {
+    let mut pts = vec![DVec3::ZERO];
+    for j in 0..6 {
+        let a = j as f64 * std::f64::consts::PI / 3.0;
+        pts.push(DVec3::new(a.cos(), a.sin(), 0.0));
+    }
+    pts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn flat_fan_has_zero_folds_and_a_sliver_corner_folds_back() {
-        // A regular hexagon fan around the origin in the plane z = 0.
-        let mut pts = vec![DVec3::ZERO];
-        for j in 0..6 {
-            let a = j as f64 * std::f64::consts::PI / 3.0;
-            pts.push(DVec3::new(a.cos(), a.sin(), 0.0));
-        }
+        let pts = hexagon_fan();
         let ring: Vec<u32> = (1..=6).collect();
         let mut f = Vec::new();
         fold_angles(&pts, 0, &ring, &mut f);

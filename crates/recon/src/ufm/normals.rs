@@ -385,11 +385,7 @@ mod tests {
     #[test]
     fn facet_average_of_a_fan() {
         // A regular hexagon fan around the origin, tilted out of z = 0 on one side.
-        let mut pts = vec![DVec3::ZERO];
-        for j in 0..6 {
-            let a = j as f64 * std::f64::consts::PI / 3.0;
-            pts.push(DVec3::new(a.cos(), a.sin(), 0.0));
-        }
+        let mut pts = crate::ufm::geometry::hexagon_fan();
         let ring: Vec<u32> = (1..=6).collect();
         let n = facet_average(&pts, DVec3::ZERO, &ring, |_| 3.0).unwrap();
         assert!((n - DVec3::Z).length() < 1e-12, "{n}");
