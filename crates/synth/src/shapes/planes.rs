@@ -277,33 +277,7 @@ impl Geometry for Planes {
         let ns = ((self.w / self.l * nx as f64).ceil() as usize).max(1);
         let g = self.grid(nx + 1, ns + 1).expect("grid");
         let verts = g.into_iter().map(|s| s.position).collect();
-        let idx = |k: usize, i: usize, j: usize| -> u32 {
-            if j == 0 {
-                i as u32
-            } else {
-                ((nx + 1) * (1 + k * ns + (j - 1)) + i) as u32
-            }
-        };
-        let mut faces = Vec::new();
-        for k in 0..2 {
-            for j in 0..ns {
-                for i in 0..nx {
-                    let (a, b, c, d) = (
-                        idx(k, i, j),
-                        idx(k, i + 1, j),
-                        idx(k, i + 1, j + 1),
-                        idx(k, i, j + 1),
-                    );
-                    if k == 0 {
-                        faces.push([a, b, c]);
-                        faces.push([a, c, d]);
-                    } else {
-                        faces.push([a, c, b]);
-                        faces.push([a, d, c]);
-                    }
-                }
-            }
-        }
+        let faces = super::sheet::two_sheet_faces(nx, ns);
         Some(TriMesh::new(verts, faces).expect("valid planes mesh"))
     }
 

@@ -115,34 +115,7 @@ impl Geometry for Wedge {
         let ns = ((self.w / self.l * nx as f64).ceil() as usize).max(1);
         let g = self.grid(nx + 1, ns + 1).expect("grid");
         let verts = g.into_iter().map(|s| s.position).collect();
-        // Vertex (i, j) of sheet k: ridge row j = 0 shared.
-        let idx = |k: usize, i: usize, j: usize| -> u32 {
-            if j == 0 {
-                i as u32
-            } else {
-                ((nx + 1) * (1 + k * ns + (j - 1)) + i) as u32
-            }
-        };
-        let mut faces = Vec::new();
-        for k in 0..2 {
-            for j in 0..ns {
-                for i in 0..nx {
-                    let (a, b, c, d) = (
-                        idx(k, i, j),
-                        idx(k, i + 1, j),
-                        idx(k, i + 1, j + 1),
-                        idx(k, i, j + 1),
-                    );
-                    if k == 0 {
-                        faces.push([a, b, c]);
-                        faces.push([a, c, d]);
-                    } else {
-                        faces.push([a, c, b]);
-                        faces.push([a, d, c]);
-                    }
-                }
-            }
-        }
+        let faces = two_sheet_faces(nx, ns);
         Some(TriMesh::new(verts, faces).expect("valid wedge mesh"))
     }
 
@@ -415,4 +388,40 @@ impl Geometry for HeightField {
         }
         Some(out)
     }
+}
+
+/// Faces of two sheets that share a ridge row, for vertices in the order of the
+/// wedge-like grids (`nx + 1` ridge points, then `ns` rows of sheet A, then `ns` rows of
+/// sheet B): `nx x ns` quads per sheet, two triangles each, sheet B wound the other
+/// way so both face outwards. Shared by the `wedge` and `planes` meshes.
+pub(crate) fn two_sheet_faces(nx: usize, ns: usize) -> Vec<[u32; 3]> {
+    // Vertex (i, j) of sheet k: ridge row j = 0 shared.
+    let idx = |k: usize, i: usize, j: usize| -> u32 {
+        if j == 0 {
+            i as u32
+        } else {
+            ((nx + 1) * (1 + k * ns + (j - 1)) + i) as u32
+        }
+    };
+    let mut faces = Vec::with_capacity(4 * nx * ns);
+    for k in 0..2 {
+        for j in 0..ns {
+            for i in 0..nx {
+                let (a, b, c, d) = (
+                    idx(k, i, j),
+                    idx(k, i + 1, j),
+                    idx(k, i + 1, j + 1),
+                    idx(k, i, j + 1),
+                );
+                if k == 0 {
+                    faces.push([a, b, c]);
+                    faces.push([a, c, d]);
+                } else {
+                    faces.push([a, c, b]);
+                    faces.push([a, d, c]);
+                }
+            }
+        }
+    }
+    faces
 }
