@@ -69,6 +69,19 @@ fn canonical_sign(v: DVec3) -> DVec3 {
     if c < 0.0 { -v } else { v }
 }
 
+/// The symmetric part of `m` and its largest absolute entry (the eigen solvers work on
+/// the matrix scaled by it); an error naming the column for a non-finite entry.
+#[inline]
+fn symmetrized(m: DMat3) -> Result<(DMat3, f64)> {
+    check_finite("matrix column", &[m.x_axis, m.y_axis, m.z_axis])?;
+    let sym = 0.5 * (m + m.transpose());
+    let scale = sym
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |s, x| s.max(x.abs()));
+    Ok((sym, scale))
+}
+
 /// Eigen-decomposition of the symmetric 3x3 matrix `m` (see [`SymEigen3`]).
 ///
 /// Only the symmetric part `(m + m^T) / 2` is used, so a matrix that is symmetric up to
@@ -80,12 +93,7 @@ fn canonical_sign(v: DVec3) -> DVec3 {
 /// [`GeomError::InvalidInput`] if the iteration does not converge (not expected for
 /// finite input).
 pub fn sym_eigen3(m: DMat3) -> Result<SymEigen3> {
-    check_finite("matrix column", &[m.x_axis, m.y_axis, m.z_axis])?;
-    let sym = 0.5 * (m + m.transpose());
-    let scale = sym
-        .to_cols_array()
-        .iter()
-        .fold(0.0f64, |s, x| s.max(x.abs()));
+    let (sym, scale) = symmetrized(m)?;
     if scale == 0.0 {
         return Ok(SymEigen3 {
             values: [0.0; 3],
@@ -184,12 +192,7 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
             vector: e.vectors[0],
         })
     };
-    check_finite("matrix column", &[m.x_axis, m.y_axis, m.z_axis])?;
-    let sym = 0.5 * (m + m.transpose());
-    let scale = sym
-        .to_cols_array()
-        .iter()
-        .fold(0.0f64, |s, x| s.max(x.abs()));
+    let (sym, scale) = symmetrized(m)?;
     if scale == 0.0 {
         return full(m);
     }
