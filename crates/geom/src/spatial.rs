@@ -714,16 +714,14 @@ pub fn knn_self_table(points: &[DVec3], k: usize, exclude_self: bool) -> Result<
         .par_chunks_mut(keff)
         .zip(sorted_d2.par_chunks_mut(keff))
         .enumerate()
-        .for_each_init(
-            || (Vec::new(), None),
-            |(buf, hint), (slot, (ri, rd))| {
-                tree.self_row(slot, keff, exclude_self, buf, hint);
-                for (j, c) in buf.iter().enumerate() {
-                    ri[j] = c.index;
-                    rd[j] = c.dist2;
-                }
-            },
-        );
+        .with_min_len(SELF_MIN_BATCH)
+        .for_each_init(SelfScratch::default, |scratch, (slot, (ri, rd))| {
+            let buf = tree.self_row(slot, keff, exclude_self, scratch);
+            for (j, c) in buf.iter().enumerate() {
+                ri[j] = c.index();
+                rd[j] = c.dist2();
+            }
+        });
     let rank = tree.rank();
     let mut indices = vec![0u32; n * keff];
     let mut dist2 = vec![0.0; n * keff];
@@ -770,15 +768,16 @@ where
     let tree = SelfKnnTree::new(points);
     let in_tree_order: Vec<T> = (0..points.len())
         .into_par_iter()
+        .with_min_len(SELF_MIN_BATCH)
         .map_init(
-            || (init(), Vec::new(), Vec::new(), None),
-            |(state, buf, hits, hint), slot| {
-                tree.self_row(slot, keff, exclude_self, buf, hint);
+            || (init(), SelfScratch::default(), Vec::new()),
+            |(state, scratch, hits), slot| {
+                let buf = tree.self_row(slot, keff, exclude_self, scratch);
                 hits.clear();
                 hits.extend(buf.iter().map(|c| KnnHit {
-                    index: c.index,
-                    dist2: c.dist2,
-                    point: tree.items[c.slot as usize].0,
+                    index: c.index(),
+                    dist2: c.dist2(),
+                    point: tree.items[c.slot() as usize].0,
                 }));
                 f(state, tree.items[slot].1 as usize, hits)
             },
@@ -794,6 +793,10 @@ where
 /// Points per leaf of [`SelfKnnTree`]. Measured with callgrind (`pf`, k = 16, 100k torus
 /// points): 8 / 16 / 32 points per leaf cost 1.016 / 1 / 1.059 times the instructions.
 const SELF_LEAF: usize = 16;
+
+/// Fewest consecutive queries per rayon work item: each item starts with an empty leaf
+/// cache, so tiny items would rebuild candidate lists their neighbours already built.
+const SELF_MIN_BATCH: usize = 1024;
 
 /// Subtrees with more points than this are built by two rayon tasks.
 const SELF_PAR_BUILD: usize = 1 << 15;
@@ -812,18 +815,40 @@ struct SelfNode {
     right_min: u32,
 }
 
-/// A candidate neighbour during a query: squared distance, input index and tree slot.
+/// A candidate neighbour during a query: squared distance, input index and tree slot
+/// packed into one integer whose order is the (distance, index) order of all neighbour
+/// lists (a squared distance is never negative or NaN, and the bits of non-negative
+/// floats order like the floats; the slot, last, never decides between two points since
+/// indices are unique). One integer comparison replaces a float and an index comparison
+/// in the insertion loop.
 #[derive(Debug, Clone, Copy)]
-struct Cand {
-    dist2: f64,
-    index: u32,
-    slot: u32,
-}
+struct Cand(u128);
 
 impl Cand {
-    /// The (distance, index) order of all neighbour lists.
-    fn before(&self, d2: f64, index: u32) -> bool {
-        self.dist2 < d2 || (self.dist2 == d2 && self.index < index)
+    #[inline]
+    fn new(dist2: f64, index: u32, slot: u32) -> Self {
+        Self(((dist2.to_bits() as u128) << 64) | ((index as u128) << 32) | slot as u128)
+    }
+
+    /// The key of "distance `dist2`, index `index`", below every slot.
+    #[inline]
+    fn floor(dist2: f64, index: u32) -> Self {
+        Self::new(dist2, index, 0)
+    }
+
+    #[inline]
+    fn dist2(self) -> f64 {
+        f64::from_bits((self.0 >> 64) as u64)
+    }
+
+    #[inline]
+    fn index(self) -> u32 {
+        (self.0 >> 32) as u32
+    }
+
+    #[inline]
+    fn slot(self) -> u32 {
+        self.0 as u32
     }
 }
 
@@ -846,6 +871,50 @@ struct SelfKnnTree {
     items: Vec<(DVec3, u32)>,
     /// Internal nodes in pre-order.
     nodes: Vec<SelfNode>,
+    /// Leaves in slot order, with their bounding boxes.
+    leaves: Vec<SelfLeaf>,
+    /// Per internal node, the id of the first leaf of its right subtree.
+    right_leaf: Vec<u32>,
+}
+
+/// A leaf of [`SelfKnnTree`]: its slot range, bounding box and smallest input index.
+#[derive(Debug, Clone, Copy)]
+struct SelfLeaf {
+    lo: u32,
+    hi: u32,
+    min_index: u32,
+    bmin: DVec3,
+    bmax: DVec3,
+}
+
+/// Slot ranges of the leaves of the subtree at `node` over slots `lo..hi`, appended in
+/// order; `right_leaf[node]` gets the id of the first leaf of each node's right subtree.
+fn self_leaf_ranges(
+    nodes: &[SelfNode],
+    node: usize,
+    lo: usize,
+    hi: usize,
+    out: &mut Vec<(u32, u32)>,
+    right_leaf: &mut [u32],
+) {
+    if hi - lo <= SELF_LEAF {
+        out.push((lo as u32, hi as u32));
+    } else {
+        let mid = lo + (hi - lo) / 2;
+        self_leaf_ranges(nodes, node + 1, lo, mid, out, right_leaf);
+        right_leaf[node] = out.len() as u32;
+        self_leaf_ranges(nodes, nodes[node].right as usize, mid, hi, out, right_leaf);
+    }
+}
+
+/// Squared distance between the boxes `[amin, amax]` and `[bmin, bmax]` (0 if they
+/// overlap).
+#[inline]
+fn box_gap2(amin: DVec3, amax: DVec3, bmin: DVec3, bmax: DVec3) -> f64 {
+    (amin - bmax)
+        .max(bmin - amax)
+        .max(DVec3::ZERO)
+        .length_squared()
 }
 
 /// Number of internal nodes of a [`SelfKnnTree`] over `len` points.
@@ -879,7 +948,13 @@ fn self_build(items: &mut [(DVec3, u32)], nodes: &mut [SelfNode], base: usize) -
         2
     };
     let mid = len / 2;
-    items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
+    // One comparator per axis: indexing the point by a run-time axis inside the
+    // comparator cost 4 % of `pf`'s instructions.
+    match axis {
+        0 => items.select_nth_unstable_by(mid, |a, b| a.0.x.total_cmp(&b.0.x)),
+        1 => items.select_nth_unstable_by(mid, |a, b| a.0.y.total_cmp(&b.0.y)),
+        _ => items.select_nth_unstable_by(mid, |a, b| a.0.z.total_cmp(&b.0.z)),
+    };
     let split = items[mid].0[axis];
     let n_left = self_node_count(mid);
     let (left_items, right_items) = items.split_at_mut(mid);
@@ -907,28 +982,37 @@ fn self_build(items: &mut [(DVec3, u32)], nodes: &mut [SelfNode], base: usize) -
     left_min.min(right_min)
 }
 
-/// Query state: the candidates so far, `best[..len]` sorted ascending by
-/// (distance, index), and the current k-th one (`worst`, infinitely far until there are
-/// k candidates).
+/// Query state: the candidates so far, `best[..len]` sorted ascending, and the current
+/// k-th one (`worst`; until there are k candidates, the starting bound with the largest
+/// index and slot).
 struct SelfQuery<'a> {
-    q: DVec3,
     len: usize,
     best: &'a mut [Cand],
-    worst_d2: f64,
-    worst_index: u32,
+    worst: Cand,
 }
 
-impl SelfQuery<'_> {
+impl<'a> SelfQuery<'a> {
+    /// An empty query for `best.len()` neighbours among the points within squared
+    /// distance `start` (infinite for no bound).
+    fn new(best: &'a mut [Cand], start: f64) -> Self {
+        Self {
+            len: 0,
+            best,
+            worst: Cand::new(start, u32::MAX, u32::MAX),
+        }
+    }
+
     /// Whether a subtree with lower bound `bound` and smallest index `min_index` can
-    /// still contribute.
+    /// still contribute: its best possible key must precede the k-th candidate's.
     #[inline]
     fn may_enter(&self, bound: f64, min_index: u32) -> bool {
-        bound < self.worst_d2 || (bound == self.worst_d2 && min_index < self.worst_index)
+        Cand::floor(bound, min_index).0 < (self.worst.0 & !(u32::MAX as u128))
     }
 
     #[inline]
     fn offer(&mut self, dist2: f64, index: u32, slot: u32) {
-        if dist2 > self.worst_d2 || (dist2 == self.worst_d2 && index > self.worst_index) {
+        let c = Cand::new(dist2, index, slot);
+        if c.0 > self.worst.0 {
             return;
         }
         let k = self.best.len();
@@ -938,15 +1022,13 @@ impl SelfQuery<'_> {
         } else {
             k - 1
         };
-        while pos > 0 && !self.best[pos - 1].before(dist2, index) {
+        while pos > 0 && self.best[pos - 1].0 > c.0 {
             self.best[pos] = self.best[pos - 1];
             pos -= 1;
         }
-        self.best[pos] = Cand { dist2, index, slot };
+        self.best[pos] = c;
         if self.len == k {
-            let w = self.best[k - 1];
-            self.worst_d2 = w.dist2;
-            self.worst_index = w.index;
+            self.worst = self.best[k - 1];
         }
     }
 }
@@ -954,13 +1036,42 @@ impl SelfQuery<'_> {
 impl SelfKnnTree {
     fn new(points: &[DVec3]) -> Self {
         let mut items: Vec<(DVec3, u32)> = points
-            .iter()
+            .par_iter()
             .enumerate()
             .map(|(i, &p)| (p, i as u32))
             .collect();
         let mut nodes = vec![SelfNode::default(); self_node_count(points.len())];
         self_build(&mut items, &mut nodes, 0);
-        Self { items, nodes }
+        let mut ranges = Vec::new();
+        let mut right_leaf = vec![0u32; nodes.len()];
+        if !items.is_empty() {
+            self_leaf_ranges(&nodes, 0, 0, items.len(), &mut ranges, &mut right_leaf);
+        }
+        let leaves = ranges
+            .par_iter()
+            .map(|&(lo, hi)| {
+                let pts = &items[lo as usize..hi as usize];
+                let (mut bmin, mut bmax, mut min_index) = (pts[0].0, pts[0].0, u32::MAX);
+                for it in pts {
+                    bmin = bmin.min(it.0);
+                    bmax = bmax.max(it.0);
+                    min_index = min_index.min(it.1);
+                }
+                SelfLeaf {
+                    lo,
+                    hi,
+                    min_index,
+                    bmin,
+                    bmax,
+                }
+            })
+            .collect();
+        Self {
+            items,
+            nodes,
+            leaves,
+            right_leaf,
+        }
     }
 
     /// `rank[i]` = tree slot of input point `i`.
@@ -981,14 +1092,7 @@ impl SelfKnnTree {
     /// search from the start without changing the result. Consecutive queries in tree
     /// order are neighbours, which makes the bound tight. Updated on return.
     fn knn(&self, q: DVec3, k: usize, best: &mut Vec<Cand>, hint: &mut Option<(DVec3, f64)>) {
-        best.resize(
-            k,
-            Cand {
-                dist2: 0.0,
-                index: 0,
-                slot: 0,
-            },
-        );
+        best.resize(k, Cand(0));
         let start = match *hint {
             Some((p, r)) => {
                 let b = ((q - p).length() + r) * (1.0 + 1e-9);
@@ -996,31 +1100,33 @@ impl SelfKnnTree {
             }
             None => f64::INFINITY,
         };
-        let mut st = SelfQuery {
-            q,
-            len: 0,
-            best,
-            worst_d2: start,
-            worst_index: u32::MAX,
-        };
-        self.search(0, 0, self.items.len(), [0.0; 3], &mut st);
+        let mut st = SelfQuery::new(best, start);
+        self.search(q, 0, 0, self.items.len(), [0.0; 3], &mut st);
         debug_assert_eq!(st.len, k);
-        *hint = Some((q, best[k - 1].dist2.sqrt()));
+        *hint = Some((q, best[k - 1].dist2().sqrt()));
     }
 
-    fn search(&self, node: usize, lo: usize, hi: usize, off: [f64; 3], st: &mut SelfQuery) {
+    fn search(
+        &self,
+        q: DVec3,
+        node: usize,
+        lo: usize,
+        hi: usize,
+        off: [f64; 3],
+        st: &mut SelfQuery,
+    ) {
         if hi - lo <= SELF_LEAF {
             for (s, &(p, index)) in self.items[lo..hi].iter().enumerate() {
                 // Same expression as everywhere else in this module, so distances (and
                 // therefore ties) agree bit for bit with PointIndex and brute force.
-                let d2 = (st.q - p).length_squared();
+                let d2 = (q - p).length_squared();
                 st.offer(d2, index, (lo + s) as u32);
             }
             return;
         }
         let nd = self.nodes[node];
         let axis = nd.axis as usize;
-        let diff = st.q[axis] - nd.split;
+        let diff = q[axis] - nd.split;
         let mid = lo + (hi - lo) / 2;
         let left = (node + 1, lo, mid, nd.left_min);
         let right = (nd.right as usize, mid, hi, nd.right_min);
@@ -1029,7 +1135,7 @@ impl SelfKnnTree {
         } else {
             (right, left)
         };
-        self.search(near.0, near.1, near.2, off, st);
+        self.search(q, near.0, near.1, near.2, off, st);
         // Every point of the far side is at least |diff| away along `axis` (rounding is
         // monotone, so fl(|p - q|) >= fl(|split - q|)), and at least off[a] along the
         // other axes: the bound never exceeds a computed distance, so pruning is exact.
@@ -1037,31 +1143,219 @@ impl SelfKnnTree {
         far_off[axis] = diff;
         let bound = far_off[0] * far_off[0] + far_off[1] * far_off[1] + far_off[2] * far_off[2];
         if st.may_enter(bound, far.3) {
-            self.search(far.0, far.1, far.2, far_off, st);
+            self.search(q, far.0, far.1, far.2, far_off, st);
         }
     }
 
     /// Row of tree slot `slot`: its `keff` nearest points (itself excluded when
-    /// `exclude_self`), into `buf`.
-    fn self_row(
+    /// `exclude_self`), sorted by (squared distance, index).
+    ///
+    /// Queries of one leaf share one list of candidate leaves (see [`LeafCands`]), built
+    /// when `slot` leaves the cached leaf; a leaf whose list would be too long (exact
+    /// duplicates, very uneven density) queries the tree point by point instead.
+    fn self_row<'s>(
         &self,
         slot: usize,
         keff: usize,
         exclude_self: bool,
-        buf: &mut Vec<Cand>,
-        hint: &mut Option<(DVec3, f64)>,
-    ) {
+        s: &'s mut SelfScratch,
+    ) -> &'s [Cand] {
         let (p, i) = self.items[slot];
-        if exclude_self {
-            self.knn(p, keff + 1, buf, hint);
-            match buf.iter().position(|c| c.index == i) {
-                Some(j) => {
-                    buf.remove(j);
-                }
-                None => buf.truncate(keff),
-            }
-        } else {
-            self.knn(p, keff, buf, hint);
+        let kq = if exclude_self { keff + 1 } else { keff };
+        let l = &s.leaf;
+        if !(l.lo <= slot && slot < l.hi && l.k == kq) {
+            self.load_leaf(slot, kq, s);
         }
+        if s.leaf.usable {
+            self.scan_leaves(p, kq, &s.leaf, &mut s.order, &mut s.buf);
+        } else {
+            self.knn(p, kq, &mut s.buf, &mut s.hint);
+        }
+        if exclude_self {
+            match s.buf.iter().position(|c| c.index() == i) {
+                Some(j) => {
+                    s.buf.remove(j);
+                }
+                None => s.buf.truncate(keff),
+            }
+        }
+        &s.buf
     }
+
+    /// Leaf id of tree slot `slot`.
+    fn leaf_of(&self, slot: usize) -> usize {
+        self.leaves.partition_point(|l| l.hi as usize <= slot)
+    }
+
+    /// Fills `s.leaf` with the candidate leaves of the leaf holding `slot` for `kq`-NN
+    /// queries: every leaf within `rho + r_c` of its bounding box, where `c` is the leaf
+    /// point nearest the box centre, `r_c` its exact `kq`-th neighbour distance and `rho`
+    /// the largest distance from `c` to a leaf point. By the triangle inequality the `kq`
+    /// nearest points of any leaf point `q` lie within `|q - c| + r_c <= rho + r_c` of
+    /// `q`, so they are all in candidate leaves. The list is sorted by distance to the
+    /// leaf's box, so that the nearest points are offered first.
+    fn load_leaf(&self, slot: usize, kq: usize, s: &mut SelfScratch) {
+        let me = self.leaves[self.leaf_of(slot)];
+        let leaf = &self.items[me.lo as usize..me.hi as usize];
+        let mid = (me.bmin + me.bmax) * 0.5;
+        let c = leaf
+            .iter()
+            .map(|it| it.0)
+            .min_by(|a, b| {
+                (*a - mid)
+                    .length_squared()
+                    .total_cmp(&(*b - mid).length_squared())
+            })
+            .unwrap_or(mid);
+        self.knn(c, kq, &mut s.buf, &mut s.hint);
+        let rc = s.buf[kq - 1].dist2().sqrt();
+        let rho = leaf
+            .iter()
+            .map(|it| (it.0 - c).length())
+            .fold(0.0, f64::max);
+        // The same inflation as the query hint: far beyond rounding, so no needed point
+        // is missed by a rounded comparison.
+        let r = (rho + rc) * (1.0 + 1e-9);
+        let l = &mut s.leaf;
+        l.lo = me.lo as usize;
+        l.hi = me.hi as usize;
+        l.k = kq;
+        l.c = c;
+        l.rc = rc;
+        l.ids.clear();
+        let cap = LEAF_CANDS_BASE + kq.div_ceil(SELF_LEAF) * LEAF_CANDS_PER_K;
+        l.usable = self.gather(0, 0, self.items.len(), 0, &me, r * r, cap, &mut l.ids);
+    }
+
+    /// Appends to `out` (gap, id) for every leaf of the subtree over slots `lo..hi`
+    /// (whose first leaf has id `first`) within squared distance `r2` of leaf `me`'s
+    /// box; false (and stops) once more than `cap` are found.
+    #[allow(clippy::too_many_arguments)]
+    fn gather(
+        &self,
+        node: usize,
+        lo: usize,
+        hi: usize,
+        first: usize,
+        me: &SelfLeaf,
+        r2: f64,
+        cap: usize,
+        out: &mut Vec<(f64, u32)>,
+    ) -> bool {
+        if hi - lo <= SELF_LEAF {
+            let l = &self.leaves[first];
+            let gap = box_gap2(me.bmin, me.bmax, l.bmin, l.bmax);
+            if gap <= r2 {
+                out.push((gap, first as u32));
+            }
+            return out.len() <= cap;
+        }
+        let nd = self.nodes[node];
+        let axis = nd.axis as usize;
+        let mid = lo + (hi - lo) / 2;
+        // Left points have coordinate <= split, right ones >= split.
+        let (below, above) = (me.bmin[axis] - nd.split, nd.split - me.bmax[axis]);
+        if (below <= 0.0 || below * below <= r2)
+            && !self.gather(node + 1, lo, mid, first, me, r2, cap, out)
+        {
+            return false;
+        }
+        if above > 0.0 && above * above > r2 {
+            return true;
+        }
+        let right_first = self.right_leaf[node] as usize;
+        self.gather(nd.right as usize, mid, hi, right_first, me, r2, cap, out)
+    }
+
+    /// The `k` nearest points of leaf point `q` into `best`, sorted by (squared
+    /// distance, index), from the candidate leaves `l` (see `load_leaf`), visited in
+    /// order of their distance to `q` (`order` is scratch).
+    fn scan_leaves(
+        &self,
+        q: DVec3,
+        k: usize,
+        l: &LeafCands,
+        order: &mut Vec<(f64, u32)>,
+        best: &mut Vec<Cand>,
+    ) {
+        best.resize(k, Cand(0));
+        let b = ((q - l.c).length() + l.rc) * (1.0 + 1e-9);
+        let b2 = b * b;
+        order.clear();
+        for &(_, id) in &l.ids {
+            let leaf = &self.leaves[id as usize];
+            // The box distance never exceeds a computed point distance (rounding is
+            // monotone), so skipping on it is exact.
+            let bound = (leaf.bmin - q)
+                .max(q - leaf.bmax)
+                .max(DVec3::ZERO)
+                .length_squared();
+            if bound <= b2 {
+                order.push((bound, id));
+            }
+        }
+        // Nearest leaves first: the k-th distance falls fast, so fewer points are
+        // inserted and the far leaves are skipped. The order does not change the result.
+        insertion_sort_by_key(order);
+        let mut st = SelfQuery::new(best, b2);
+        for &(bound, id) in order.iter() {
+            let leaf = &self.leaves[id as usize];
+            if !st.may_enter(bound, leaf.min_index) {
+                if bound > st.worst.dist2() {
+                    break;
+                }
+                continue;
+            }
+            let (lo, hi) = (leaf.lo as usize, leaf.hi as usize);
+            for (s, &(p, index)) in self.items[lo..hi].iter().enumerate() {
+                let d2 = (q - p).length_squared();
+                st.offer(d2, index, (lo + s) as u32);
+            }
+        }
+        debug_assert_eq!(st.len, k);
+    }
+}
+
+/// Sorts a short list by its first element (insertion sort: the lists hold a few dozen
+/// entries).
+fn insertion_sort_by_key(v: &mut [(f64, u32)]) {
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && v[j - 1].0 > x.0 {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
+    }
+}
+
+/// Candidate leaves of a leaf's shared list above which it is abandoned for per-point
+/// tree queries: `LEAF_CANDS_BASE` plus `LEAF_CANDS_PER_K` per leaf's worth of
+/// neighbours (an evenly sampled surface needs about 10-15 leaves at k = 16).
+const LEAF_CANDS_BASE: usize = 48;
+const LEAF_CANDS_PER_K: usize = 8;
+
+/// Per-thread scratch of the all-points kNN: the result row, the tree-query hint and
+/// the current leaf's candidate leaves.
+#[derive(Default)]
+struct SelfScratch {
+    buf: Vec<Cand>,
+    hint: Option<(DVec3, f64)>,
+    leaf: LeafCands,
+    order: Vec<(f64, u32)>,
+}
+
+/// The candidate leaves shared by the queries of one leaf (slots `lo..hi`).
+#[derive(Default)]
+struct LeafCands {
+    lo: usize,
+    hi: usize,
+    k: usize,
+    usable: bool,
+    /// The leaf point the list was built around and its k-th neighbour distance.
+    c: DVec3,
+    rc: f64,
+    /// (squared box gap, leaf id), nearest first.
+    ids: Vec<(f64, u32)>,
 }

@@ -149,6 +149,29 @@ fn knn_random_matches_brute_force() {
     check_knn_all(&pts[..800], 8);
 }
 
+/// The all-points kNN shares one candidate list per tree leaf and falls back to per-point
+/// queries where the list would be long: a surface sample (the shared path), a dense
+/// cluster inside a sparse cloud (long lists near the cluster's rim) and a point far out
+/// all match brute force, for k below, at and above the leaf size.
+#[test]
+fn knn_all_matches_brute_force_across_densities() {
+    let mut rng = Rng(11);
+    let mut pts: Vec<DVec3> = (0..1500)
+        .map(|_| {
+            let v = rng.vec(-1.0, 1.0);
+            let (u, w) = (v.x * std::f64::consts::PI, v.y * std::f64::consts::PI);
+            let c = 1.0 + 0.4 * w.cos();
+            DVec3::new(c * u.cos(), c * u.sin(), 0.4 * w.sin())
+        })
+        .collect();
+    pts.extend((0..600).map(|_| rng.vec(-1e-3, 1e-3) + DVec3::new(1.4, 0.0, 0.0)));
+    pts.extend(random_points(&mut rng, 200).into_iter().map(|p| p * 3.0));
+    pts.push(DVec3::new(50.0, -20.0, 7.0));
+    for k in [1, 5, 16, 40] {
+        check_knn_all(&pts, k);
+    }
+}
+
 #[test]
 fn knn_grid_ties_broken_by_index() {
     let pts = grid(9, 0.5);
