@@ -199,23 +199,24 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
     let a = sym * (1.0 / scale);
     let (a00, a11, a22) = (a.x_axis.x, a.y_axis.y, a.z_axis.z);
     let (a01, a02, a12) = (a.y_axis.x, a.z_axis.x, a.z_axis.y);
-    let q = (a00 + a11 + a22) / 3.0;
-    let (b00, b11, b22) = (a00 - q, a11 - q, a22 - q);
-    let p1 = a01 * a01 + a02 * a02 + a12 * a12;
-    let p2 = b00 * b00 + b11 * b11 + b22 * b22 + 2.0 * p1;
-    if p2 <= 1e-24 {
-        // (Nearly) a multiple of the identity.
+    // Characteristic polynomial p(l) = -l^3 + c2 l^2 - c1 l + c0.
+    let c2 = a00 + a11 + a22;
+    let c1 = a00 * a11 - a01 * a01 + a00 * a22 - a02 * a02 + a11 * a22 - a12 * a12;
+    let c0 = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02)
+        + a02 * (a01 * a12 - a11 * a02);
+    let Some(l0) = smallest_root(c2, c1, c0) else {
         return full(m);
-    }
-    let p = (p2 / 6.0).sqrt();
-    let det_b = b00 * (b11 * b22 - a12 * a12) - a01 * (a01 * b22 - a12 * a02)
-        + a02 * (a01 * a12 - b11 * a02);
-    let r = (det_b / (2.0 * p * p * p)).clamp(-1.0, 1.0);
-    let phi = r.acos() / 3.0;
-    let l2 = q + 2.0 * p * phi.cos();
-    let l0 = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
-    let l1 = 3.0 * q - l2 - l0;
-    let mag = l0.abs().max(l2.abs());
+    };
+    // The two others from the remaining quadratic l^2 - s l + t (only for the
+    // separation test; the returned values come from the 2x2 restriction below).
+    let s = c2 - l0;
+    let t = c1 - l0 * s;
+    let disc = 0.25 * s * s - t;
+    let l1 = 0.5 * s - disc.max(0.0).sqrt();
+    let mag = l0
+        .abs()
+        .max(0.5 * s + disc.max(0.0).sqrt())
+        .max(c2.abs() / 3.0);
     // Written so that a NaN (not expected for finite input) also takes the fallback.
     let separated = l1 - l0 > SMALLEST_GAP_REL * mag;
     if !separated {
@@ -233,10 +234,17 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
         return full(m);
     };
     let rayleigh = |v: DVec3| v.dot(a * v);
-    let l0 = rayleigh(v);
-    let (r0, r1, r2) = rows(l0);
-    let Some(v) = null_vector(r0, r1, r2) else {
-        return full(m);
+    // Newton's root is accurate to rounding, so the vector's error is about
+    // eps / gap^2 (relative to |l|max); where the gap is small the vector is refined once
+    // from the Rayleigh quotient, whose error is quadratic in the vector's.
+    let v = if l1 - l0 > REFINE_GAP_REL * mag {
+        v
+    } else {
+        let (r0, r1, r2) = rows(rayleigh(v));
+        match null_vector(r0, r1, r2) {
+            Some(v) => v,
+            None => return full(m),
+        }
     };
     // The other two eigenvalues from the 2x2 restriction of A to the plane orthogonal
     // to v (stable even when they nearly coincide, where the cubic's roots are not).
@@ -252,6 +260,40 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
         values: [l0 * scale, l1 * scale, l2 * scale],
         vector: canonical_sign(v),
     })
+}
+
+/// Eigenvalue gap (relative to the largest magnitude) above which the eigenvector from
+/// Newton's root is not refined.
+const REFINE_GAP_REL: f64 = 0.25;
+
+/// Smallest root of `-l^3 + c2 l^2 - c1 l + c0` (the characteristic polynomial of a
+/// symmetric matrix scaled to entries of at most 1, so all roots are real and in
+/// `[-3, 3]`), by Newton's method from the left of every root: from there the iterates
+/// increase monotonically to the smallest root, quadratically once near it. `None` when
+/// it has not settled after a few dozen steps (a double smallest root converges only
+/// linearly; such matrices are not separated anyway and go to the full solver).
+fn smallest_root(c2: f64, c1: f64, c0: f64) -> Option<f64> {
+    // Start at 0 when the matrix is positive semi-definite up to rounding (the common
+    // case, covariances: few steps), else at the bound -3.
+    let p = |l: f64| ((c2 - l) * l - c1) * l + c0;
+    let mut l = if c0 >= 0.0 && c1 >= 0.0 && c2 >= 0.0 {
+        0.0
+    } else {
+        -3.0
+    };
+    for _ in 0..40 {
+        let dp = (2.0 * c2 - 3.0 * l) * l - c1;
+        let step = p(l) / dp;
+        if step.is_nan() {
+            return None;
+        }
+        let next = l - step;
+        if next <= l || step.abs() <= 1e-15 * (1.0 + l.abs()) {
+            return Some(next.max(l));
+        }
+        l = next;
+    }
+    None
 }
 
 /// Weighted mean and covariance of a point set.
