@@ -8,6 +8,7 @@ use glam::{DMat3, DVec3};
 use reconbench_geom::PointCloud;
 use reconbench_geom::linalg::sym_eigen3_smallest;
 use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
+use reconbench_geom::spatial::KnnHit;
 use serde::{Deserialize, Serialize};
 
 use crate::neighbors::{estimate_per_point_hits, row_points};
@@ -115,6 +116,42 @@ pub fn plane_normal_of(
     normal_of_covariance(m)
 }
 
+/// [`plane_normal_of`] with unit weights over the positions of a kNN result, in one
+/// fused loop per pass (the `pf` hot path).
+///
+/// The result is bit for bit that of `plane_normal_of(row_points(..), |_| 1.0)`: the
+/// hits hold the same positions as the row (the point itself is either one of them or
+/// replaced by an exact duplicate at distance 0, which comes first), the sums run in the
+/// same order, and the six distinct covariance entries are the same products.
+pub fn unweighted_normal_of_hits(hits: &[KnnHit]) -> DVec3 {
+    if hits.is_empty() {
+        return DVec3::ZERO;
+    }
+    let mut wsum = 0.0;
+    let mut c = DVec3::ZERO;
+    for h in hits {
+        wsum += 1.0;
+        c += 1.0 * h.point;
+    }
+    c /= wsum;
+    let (mut xx, mut xy, mut xz, mut yy, mut yz, mut zz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for h in hits {
+        let d = h.point - c;
+        xx += d.x * (1.0 * d.x);
+        xy += d.y * (1.0 * d.x);
+        xz += d.z * (1.0 * d.x);
+        yy += d.y * (1.0 * d.y);
+        yz += d.z * (1.0 * d.y);
+        zz += d.z * (1.0 * d.z);
+    }
+    let m = DMat3::from_cols(
+        DVec3::new(xx, xy, xz),
+        DVec3::new(xy, yy, yz),
+        DVec3::new(xz, yz, zz),
+    );
+    normal_of_covariance(m)
+}
+
 /// The plane normal of a covariance matrix: the smallest eigenvalue's eigenvector, zero
 /// when the two largest eigenvalues do not span a plane (coincident or collinear points).
 pub fn normal_of_covariance(m: DMat3) -> DVec3 {
@@ -131,8 +168,8 @@ impl NormalEstimator for PlaneFit {
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
         let p = &self.params;
-        estimate_per_point_hits(cloud, ctx, p.k, 3, p.orient_k, |pts, i, hits, _| {
-            plane_normal_of(row_points(pts, i, hits), |_| 1.0)
+        estimate_per_point_hits(cloud, ctx, p.k, 3, p.orient_k, |_, _, hits, _| {
+            unweighted_normal_of_hits(hits)
         })
     }
 }
