@@ -95,14 +95,26 @@ impl Lattice {
     /// `None` when the cube misses the box.
     #[inline]
     pub fn cube(&self, o: DVec3, r: f64) -> Option<[[i64; 2]; 3]> {
+        // The same ranges as clamping `floor` of the scaled ends into `0..dims`, without
+        // the floors: `floor(t) < 0 <=> t < 0`, `floor(t) > d - 1 <=> t >= d` and
+        // `floor(t) >= d - 1 <=> t >= d - 1` for integral `d`, and a cast truncates,
+        // which is `floor` for the non-negative `t` left. Finite `o` and `r` only.
+        debug_assert!(o.is_finite() && r.is_finite());
         let mut out = [[0i64; 2]; 3];
         for a in 0..3 {
-            let lo = floor((o[a] - r - self.origin[a]) * self.inv_h);
-            let hi = floor((o[a] + r - self.origin[a]) * self.inv_h);
-            if hi < 0.0 || lo > (self.dims[a] - 1) as f64 {
+            let lo = (o[a] - r - self.origin[a]) * self.inv_h;
+            let hi = (o[a] + r - self.origin[a]) * self.inv_h;
+            let top = (self.dims[a] - 1) as f64;
+            if hi < 0.0 || lo >= top + 1.0 {
                 return None;
             }
-            out[a] = [lo.max(0.0) as i64, hi.min((self.dims[a] - 1) as f64) as i64];
+            let l = if lo < 0.0 { 0 } else { lo as i64 };
+            let h = if hi >= top {
+                self.dims[a] - 1
+            } else {
+                hi as i64
+            };
+            out[a] = [l, h];
         }
         Some(out)
     }
