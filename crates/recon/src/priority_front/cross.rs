@@ -80,21 +80,40 @@ pub(crate) struct XProj {
     pub near: bool,
 }
 
-/// Projects the front edges `xs` into the plane through `o` with orthonormal basis
-/// `(u, v)` and unit normal `n` into the first `xs.len()` entries of `out` (reused; it
-/// only grows, so the hot path has no capacity checks and no out-of-line `Vec` code).
+/// A front edge of the gather seen from the popped edge's midpoint `o`: the offset `w`
+/// of one endpoint from `o`, `|w|^2`, and the edge's length (plane-independent).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct XNear {
+    pub w: DVec3,
+    pub ww: f64,
+    pub len: f64,
+}
+
+/// [`project_near`] of only those front edges of `xs` (with records `xn`) whose projection
+/// can reach the disk of radius `rt` around the projection of `o`; returns how many were
+/// written into `out` (in the order of `xs`). A projected edge lies within its length of
+/// the projection of its endpoint `o + w`, whose distance from `o`'s projection is
+/// `sqrt(|w|^2 - (w.n)^2)`, so an edge with `|w|^2 - (w.n)^2 > (rt + len)^2` misses the
+/// disk. With `rt` at least the distance from `o` of the triangle's vertices, such an
+/// edge can neither cross the triangle's edges nor have its first endpoint inside it,
+/// and the crossing and I6 tests on the returned edges decide as on all of them. The
+/// bound carries a relative slack of 1e-6 and an absolute one of 1e-9 r against
+/// rounding, far above the error of the projections. The kept edges are projected as by
+/// [`project_near`] (same expressions, same values).
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub(crate) fn project(
+pub(crate) fn project_near(
     pts: &[DVec3],
     xs: &[(u32, u32)],
+    xn: &[XNear],
+    rt: f64,
     u: DVec3,
     v: DVec3,
     n: DVec3,
     o: DVec3,
     r: f64,
     out: &mut Vec<XProj>,
-) {
+) -> usize {
     if out.len() < xs.len() {
         out.resize(
             xs.len(),
@@ -108,10 +127,17 @@ pub(crate) fn project(
             },
         );
     }
-    for (slot, &(x, y)) in out.iter_mut().zip(xs) {
+    let mut k = 0;
+    let (rt, pad) = (rt * (1.0 + 1e-6), 1e-9 * r);
+    for (&(x, y), m) in xs.iter().zip(xn) {
+        let h = m.w.dot(n);
+        let s = rt + m.len + pad;
+        if m.ww - h * h > s * s {
+            continue;
+        }
         let (px, py) = (pts[x as usize] - o, pts[y as usize] - o);
         let near_x = px.dot(n).abs() <= r;
-        *slot = XProj {
+        out[k] = XProj {
             x,
             y,
             p: [px.dot(u), px.dot(v)],
@@ -119,10 +145,12 @@ pub(crate) fn project(
             near_x,
             near: near_x || py.dot(n).abs() <= r,
         };
+        k += 1;
     }
+    k
 }
 
-/// [`crosses`] on edges projected by [`project`]: true when one of the two tentative edges
+/// [`crosses`] on edges projected by [`project_near`]: true when one of the two tentative edges
 /// `(s0, p0, s1, p1)` (ids and projected endpoints) properly crosses a projected front
 /// edge. Front edges sharing an endpoint with the tentative edge, and those with both
 /// endpoints farther than `r` from the plane, are skipped; a bounding-box test comes

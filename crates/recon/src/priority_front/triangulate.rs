@@ -4,7 +4,7 @@ use glam::DVec3;
 use reconbench_geom::method::{MethodError, RunCtx};
 
 use super::cross::{
-    crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project,
+    XNear, crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project_near,
 };
 use super::density::knn;
 use super::grid::NONE;
@@ -91,10 +91,12 @@ impl Mesher<'_> {
         let mut free_near = std::mem::take(&mut self.free_near);
         let mut pend = std::mem::take(&mut self.pend);
         let mut xs = std::mem::take(&mut self.xs);
+        let mut xn = std::mem::take(&mut self.xn);
         let mut chunks = std::mem::take(&mut self.chunks);
         free_near.clear();
         pend.clear();
         xs.clear();
+        xn.clear();
         let pts = self.pts;
         let state = &self.state;
         self.grid.for_cells(o, r, |range| {
@@ -111,6 +113,7 @@ impl Mesher<'_> {
         let xr = self.cfg.cross_factor * r;
         let xr2 = xr * xr;
         let (e_a, e_b, fin, fout) = (&self.e_a, &self.e_b, &self.fin, &self.fout);
+        let e_len = &self.e_len;
         self.fidx.chunks_near(o, xr, &mut chunks);
         for &c in &chunks {
             let (ids, pos) = self.fidx.chunk(c);
@@ -125,12 +128,24 @@ impl Mesher<'_> {
                 let out = fout[v as usize];
                 if out != NONE && out != e {
                     xs.push((v, e_b[out as usize]));
+                    xn.push(XNear {
+                        w: pv - o,
+                        ww: d2,
+                        len: e_len[out as usize],
+                    });
                 }
                 let inn = fin[v as usize];
                 if inn != NONE && inn != e {
                     let u = e_a[inn as usize];
-                    if (pts[u as usize] - o).length_squared() > xr2 {
+                    let wu = pts[u as usize] - o;
+                    let du2 = wu.length_squared();
+                    if du2 > xr2 {
                         xs.push((u, v));
+                        xn.push(XNear {
+                            w: wu,
+                            ww: du2,
+                            len: e_len[inn as usize],
+                        });
                     }
                 }
             }
@@ -138,6 +153,7 @@ impl Mesher<'_> {
         self.free_near = free_near;
         self.pend = pend;
         self.xs = xs;
+        self.xn = xn;
         self.chunks = chunks;
     }
 
@@ -457,15 +473,31 @@ impl Mesher<'_> {
             self.stats.sector_rejects += 1;
             return None;
         }
-        // The nearby front edges are projected once for both tests.
+        // The nearby front edges that can reach the triangle are projected once for both
+        // tests; the triangle lies within `rt` of `o` (`|a - o| = |b - o|`).
         let (u, v) = plane_basis(np);
-        project(self.pts, &self.xs, u, v, np, o, self.cfg.r, &mut self.xp);
+        let rt = (self.pts[t as usize] - o)
+            .length_squared()
+            .max((self.pts[a as usize] - o).length_squared())
+            .sqrt();
+        let k = project_near(
+            self.pts,
+            &self.xs,
+            &self.xn,
+            rt,
+            u,
+            v,
+            np,
+            o,
+            self.cfg.r,
+            &mut self.xp,
+        );
         let pr = |i: u32| {
             let q = self.pts[i as usize] - o;
             [q.dot(u), q.dot(v)]
         };
         let (qa, qt, qb) = (pr(a), pr(t), pr(b));
-        let xp = &self.xp[..self.xs.len()];
+        let xp = &self.xp[..k];
         if crosses_projected(xp, [(a, qa, t, qt), (t, qt, b, qb)]) {
             self.stats.cross_rejects += 1;
             return None;
