@@ -35,7 +35,7 @@ fn proper(p0: [f64; 2], p1: [f64; 2], q0: [f64; 2], q1: [f64; 2]) -> bool {
 /// from the plane (another sheet).
 pub(crate) fn crosses(
     pts: &[DVec3],
-    xs: &[(u32, u32)],
+    xs: &[XNear],
     n: DVec3,
     o: DVec3,
     r: f64,
@@ -51,7 +51,7 @@ pub(crate) fn crosses(
     };
     for &(s0, s1) in new_edges {
         let (p0, p1) = (proj(s0), proj(s1));
-        for &(x, y) in xs {
+        for &XNear { x, y, .. } in xs {
             if x == s0 || x == s1 || y == s0 || y == s1 {
                 continue;
             }
@@ -80,16 +80,19 @@ pub(crate) struct XProj {
     pub near: bool,
 }
 
-/// A front edge of the gather seen from the popped edge's midpoint `o`: the offset `w`
-/// of one endpoint from `o`, `|w|^2`, and the edge's length (plane-independent).
+/// A front edge `x -> y` of the gather, seen from the popped edge's midpoint `o`: the
+/// offset `w` of one endpoint from `o`, `|w|^2`, and the edge's length (all
+/// plane-independent).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct XNear {
     pub w: DVec3,
     pub ww: f64,
     pub len: f64,
+    pub x: u32,
+    pub y: u32,
 }
 
-/// [`project_near`] of only those front edges of `xs` (with records `xn`) whose projection
+/// [`project_near`] of only those front edges of `xs` whose projection
 /// can reach the disk of radius `rt` around the projection of `o`; returns how many were
 /// written into `out` (in the order of `xs`). A projected edge lies within its length of
 /// the projection of its endpoint `o + w`, whose distance from `o`'s projection is
@@ -104,8 +107,7 @@ pub(crate) struct XNear {
 #[inline]
 pub(crate) fn project_near(
     pts: &[DVec3],
-    xs: &[(u32, u32)],
-    xn: &[XNear],
+    xs: &[XNear],
     rt: f64,
     u: DVec3,
     v: DVec3,
@@ -129,7 +131,8 @@ pub(crate) fn project_near(
     }
     let mut k = 0;
     let (rt, pad) = (rt * (1.0 + 1e-6), 1e-9 * r);
-    for (&(x, y), m) in xs.iter().zip(xn) {
+    for m in xs {
+        let (x, y) = (m.x, m.y);
         let h = m.w.dot(n);
         let s = rt + m.len + pad;
         if m.ww - h * h > s * s {

@@ -144,10 +144,8 @@ pub(crate) struct Mesher<'g> {
     pub free_near: Vec<u32>,
     /// Pending candidates `(score bound, point)` of the lazy evaluation (scratch).
     pub pend: Vec<(f64, u32)>,
-    pub xs: Vec<(u32, u32)>,
-    /// Per entry of `xs`: endpoint offset and edge length for the validation's cull
-    /// (scratch, same order).
-    pub xn: Vec<XNear>,
+    /// Front edges near the popped edge, with their cull data (scratch).
+    pub xs: Vec<XNear>,
     /// Front-index chunks near the popped edge (scratch).
     pub chunks: Vec<u32>,
     /// `xs` projected into the current validation plane (scratch).
@@ -211,7 +209,6 @@ impl<'g> Mesher<'g> {
             free_near: Vec::new(),
             pend: Vec::new(),
             xs: Vec::new(),
-            xn: Vec::new(),
             chunks: Vec::new(),
             xp: Vec::new(),
             stats: Stats::default(),

@@ -81,7 +81,8 @@ impl Mesher<'_> {
     /// Step 1: gathers the candidates, Free points and front points (but `a`, `b`)
     /// within R of `o`, into `pend` with their score bounds (from the distance to `o`;
     /// the caller recomputes them for the segment distance), the Free ones also into
-    /// `free_near`, and the front edges near `o` for the crossing test into `xs`.
+    /// `free_near` (only with `reject_free_inside`, its one reader), and the front edges
+    /// near `o` with their cull data for the crossing test into `xs`.
     fn gather(&mut self, e: u32, a: u32, b: u32, o: DVec3) {
         let r = self.cfg.r;
         let r2 = r * r;
@@ -91,20 +92,22 @@ impl Mesher<'_> {
         let mut free_near = std::mem::take(&mut self.free_near);
         let mut pend = std::mem::take(&mut self.pend);
         let mut xs = std::mem::take(&mut self.xs);
-        let mut xn = std::mem::take(&mut self.xn);
         let mut chunks = std::mem::take(&mut self.chunks);
         free_near.clear();
         pend.clear();
         xs.clear();
-        xn.clear();
         let pts = self.pts;
         let state = &self.state;
+        // `free_near` serves only the optional Free-inside test.
+        let keep_free = self.cfg.reject_free_inside;
         self.grid.for_cells(o, r, |range| {
             for i in range {
                 if state[i] == FREE {
                     let d2 = (pts[i] - o).length_squared();
                     if d2 <= r2 {
-                        free_near.push(i as u32);
+                        if keep_free {
+                            free_near.push(i as u32);
+                        }
                         pend.push((bound(w, r, d2.sqrt()), i as u32));
                     }
                 }
@@ -127,11 +130,12 @@ impl Mesher<'_> {
                 }
                 let out = fout[v as usize];
                 if out != NONE && out != e {
-                    xs.push((v, e_b[out as usize]));
-                    xn.push(XNear {
+                    xs.push(XNear {
                         w: pv - o,
                         ww: d2,
                         len: e_len[out as usize],
+                        x: v,
+                        y: e_b[out as usize],
                     });
                 }
                 let inn = fin[v as usize];
@@ -140,11 +144,12 @@ impl Mesher<'_> {
                     let wu = pts[u as usize] - o;
                     let du2 = wu.length_squared();
                     if du2 > xr2 {
-                        xs.push((u, v));
-                        xn.push(XNear {
+                        xs.push(XNear {
                             w: wu,
                             ww: du2,
                             len: e_len[inn as usize],
+                            x: u,
+                            y: v,
                         });
                     }
                 }
@@ -153,7 +158,6 @@ impl Mesher<'_> {
         self.free_near = free_near;
         self.pend = pend;
         self.xs = xs;
-        self.xn = xn;
         self.chunks = chunks;
     }
 
@@ -483,7 +487,6 @@ impl Mesher<'_> {
         let k = project_near(
             self.pts,
             &self.xs,
-            &self.xn,
             rt,
             u,
             v,
