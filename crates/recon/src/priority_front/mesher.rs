@@ -142,7 +142,8 @@ pub(crate) struct Mesher<'g> {
     pub fidx: FrontIndex,
     pub cand: Vec<Cand>,
     pub free_near: Vec<u32>,
-    /// Pending candidates `(score bound, point)` of the lazy evaluation (scratch).
+    /// Pending candidates `(key, point)` of the lazy evaluation (scratch; key: squared
+    /// distance to the edge midpoint, or minus the score bound for the segment distance).
     pub pend: Vec<(f64, u32)>,
     /// Front edges near the popped edge, with their cull data (scratch).
     pub xs: Vec<XNear>,

@@ -79,14 +79,13 @@ impl Mesher<'_> {
     }
 
     /// Step 1: gathers the candidates, Free points and front points (but `a`, `b`)
-    /// within R of `o`, into `pend` with their score bounds (from the distance to `o`;
-    /// the caller recomputes them for the segment distance), the Free ones also into
+    /// within R of `o`, into `pend` keyed by their squared distance to `o` (the caller
+    /// rekeys them for the segment distance), the Free ones also into
     /// `free_near` (only with `reject_free_inside`, its one reader), and the front edges
     /// near `o` with their cull data for the crossing test into `xs`.
     fn gather(&mut self, e: u32, a: u32, b: u32, o: DVec3) {
         let r = self.cfg.r;
         let r2 = r * r;
-        let w = self.cfg.w;
         // The output lists are moved into locals for the scans: the loops then keep
         // their lengths in registers (the scans were dominated by push bookkeeping).
         let mut free_near = std::mem::take(&mut self.free_near);
@@ -108,7 +107,7 @@ impl Mesher<'_> {
                         if keep_free {
                             free_near.push(i as u32);
                         }
-                        pend.push((bound(w, r, d2.sqrt()), i as u32));
+                        pend.push((d2, i as u32));
                     }
                 }
             }
@@ -126,7 +125,7 @@ impl Mesher<'_> {
                     continue;
                 }
                 if d2 <= r2 && v != a && v != b {
-                    pend.push((bound(w, r, d2.sqrt()), v));
+                    pend.push((d2, v));
                 }
                 let out = fout[v as usize];
                 if out != NONE && out != e {
@@ -177,8 +176,12 @@ impl Mesher<'_> {
                 && (self.pts[v as usize] - o).length() <= lim
                 && !self.pend.iter().any(|&(_, t)| t == v)
             {
-                let u = self.score_bound(x, v);
-                self.pend.push((u, v));
+                let key = if self.cfg.seg_dist {
+                    -self.score_bound(x, v)
+                } else {
+                    (self.pts[v as usize] - x.o).length_squared()
+                };
+                self.pend.push((key, v));
             }
         }
     }
@@ -378,7 +381,7 @@ impl Mesher<'_> {
         if self.cfg.seg_dist {
             let mut pend = std::mem::take(&mut self.pend);
             for c in pend.iter_mut() {
-                c.0 = self.score_bound(&x, c.1);
+                c.0 = -self.score_bound(&x, c.1);
             }
             self.pend = pend;
         }
@@ -392,6 +395,10 @@ impl Mesher<'_> {
         // unevaluated candidate. The validation order is therefore exactly that of the
         // full evaluation (decreasing score, ties by lower index), but most candidates
         // of an edge are never evaluated, because the first validated one usually wins.
+        // `pend` holds keys, smallest first in U order: the squared distance to `o`
+        // (U falls with it; U is computed only for the candidate taken), or -U for the
+        // segment distance.
+        let (w, r, seg) = (self.cfg.w, self.cfg.r, self.cfg.seg_dist);
         let mut pend = std::mem::take(&mut self.pend);
         self.cand.clear();
         let mut passed = 0usize;
@@ -403,11 +410,16 @@ impl Mesher<'_> {
             while !pend.is_empty() {
                 let mut m = 0;
                 for k in 1..pend.len() {
-                    if pend[k].0 > pend[m].0 {
+                    if pend[k].0 < pend[m].0 {
                         m = k;
                     }
                 }
-                if best_score > pend[m].0 {
+                let u = if seg {
+                    -pend[m].0
+                } else {
+                    bound(w, r, pend[m].0.sqrt())
+                };
+                if best_score > u {
                     break;
                 }
                 let t = pend.swap_remove(m).1;
