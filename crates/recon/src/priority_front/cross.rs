@@ -104,7 +104,7 @@ pub(crate) struct XNear {
 /// rounding, far above the error of the projections. The kept edges are projected as by
 /// [`project_near`] (same expressions, same values).
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(never)]
 pub(crate) fn project_near(
     pts: &[DVec3],
     xs: &[XNear],
@@ -158,6 +158,7 @@ pub(crate) fn project_near(
 /// edge. Front edges sharing an endpoint with the tentative edge, and those with both
 /// endpoints farther than `r` from the plane, are skipped; a bounding-box test comes
 /// before the orientation tests.
+#[inline(never)]
 pub(crate) fn crosses_projected(
     xp: &[XProj],
     new_edges: [(u32, [f64; 2], u32, [f64; 2]); 2],
@@ -204,6 +205,7 @@ pub(crate) fn crosses_projected(
 /// projected triangle `t2` with ids `tri`. The triangle would then cover part of the
 /// front: a fold the edge-crossing test cannot see when the whole front piece lies
 /// inside the triangle.
+#[inline(never)]
 pub(crate) fn front_inside_projected(xp: &[XProj], tri: [u32; 3], t2: [[f64; 2]; 3]) -> bool {
     // A point strictly inside the triangle lies inside its bounding box: the box test
     // rejects most front vertices before the three orientation tests.

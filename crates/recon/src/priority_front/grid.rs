@@ -495,6 +495,7 @@ impl FrontIndex {
     /// Collects into `out` (cleared) the chunks holding the listed points of the buckets
     /// meeting the cube `[o - r, o + r]`; [`FrontIndex::chunk`] reads them. Lets the
     /// caller scan them in a plain loop over locals (no closure captures).
+    #[inline(never)]
     pub fn chunks_near(&self, o: DVec3, r: f64, out: &mut Vec<u32>) {
         out.clear();
         let Some(q) = self.lat.cube(o, r) else {
