@@ -503,11 +503,24 @@ impl FrontIndex {
         };
         for z in q[2][0]..=q[2][1] {
             for y in q[1][0]..=q[1][1] {
-                for x in q[0][0]..=q[0][1] {
-                    let mut c = self.head(self.bucket_of([x, y, z]));
-                    while c != NONE {
-                        out.push(c);
-                        c = self.pool[c as usize].next;
+                if self.dense {
+                    // The buckets of one row are contiguous in `heads`.
+                    let b0 = self.lat.linear([q[0][0], y, z]) as usize;
+                    let b1 = b0 + (q[0][1] - q[0][0]) as usize;
+                    for &h in &self.heads[b0..=b1] {
+                        let mut c = h;
+                        while c != NONE {
+                            out.push(c);
+                            c = self.pool[c as usize].next;
+                        }
+                    }
+                } else {
+                    for x in q[0][0]..=q[0][1] {
+                        let mut c = self.head(Lattice::key([x, y, z]));
+                        while c != NONE {
+                            out.push(c);
+                            c = self.pool[c as usize].next;
+                        }
                     }
                 }
             }
