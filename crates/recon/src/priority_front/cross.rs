@@ -81,7 +81,7 @@ pub(crate) struct XProj {
 }
 
 /// A front edge `x -> y` of the gather, seen from the popped edge's midpoint `o`: the
-/// offset `w` of one endpoint from `o`, `|w|^2`, and the edge's length (all
+/// offset `w = pts[x] - o` of its first endpoint, `|w|^2`, and the edge's length (all
 /// plane-independent).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct XNear {
@@ -133,13 +133,15 @@ pub(crate) fn project_near(
     let (rt, pad) = (rt * (1.0 + 1e-6), 1e-9 * r);
     for m in xs {
         let (x, y) = (m.x, m.y);
+        debug_assert_eq!(m.w, pts[x as usize] - o);
         let h = m.w.dot(n);
         let s = rt + m.len + pad;
         if m.ww - h * h > s * s {
             continue;
         }
-        let (px, py) = (pts[x as usize] - o, pts[y as usize] - o);
-        let near_x = px.dot(n).abs() <= r;
+        // `w` is `pts[x] - o` (the gather computed it so), and `h` its height.
+        let (px, py) = (m.w, pts[y as usize] - o);
+        let near_x = h.abs() <= r;
         out[k] = XProj {
             x,
             y,
