@@ -250,4 +250,69 @@ mod tests {
         assert!(inside_2d([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [0.2, 0.2]));
         assert!(!inside_2d([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]], [0.5, 0.5]));
     }
+
+    /// The 3-D cull of `project_near` never changes the crossing and I6 tests: random
+    /// triangles within `rt` of `o` against random front edges (near the plane, some
+    /// long, some steep), with and without the cull (`rt` infinite keeps every edge).
+    #[test]
+    fn culled_projection_decides_as_the_full_one() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let r = 1.0;
+        let (mut full, mut cut) = (Vec::new(), Vec::new());
+        let (mut hits, mut kept, mut total) = (0, 0, 0);
+        for _ in 0..3000 {
+            let mut rv = |s: f64| {
+                DVec3::new(
+                    rng.random_range(-s..s),
+                    rng.random_range(-s..s),
+                    rng.random_range(-s..s),
+                )
+            };
+            let o = rv(5.0);
+            let n = (DVec3::Z + rv(0.5)).normalize();
+            let (u, v) = plane_basis(n);
+            let flat = |p: DVec3| p - p.dot(n) * n * 0.9;
+            // Triangle a, t, b around o (a, b symmetric about o as for a front edge).
+            let ea = flat(rv(0.3));
+            let t = o + flat(rv(1.0));
+            let mut pts = vec![o + ea, t, o - ea];
+            let mut xs = Vec::new();
+            for k in 0..40u32 {
+                let x = o + flat(rv(2.0));
+                let y = x + rv(if k % 5 == 0 { 1.5 } else { 0.4 });
+                pts.push(x);
+                pts.push(y);
+                let (ix, iy) = (3 + 2 * k, 4 + 2 * k);
+                let w = x - o;
+                xs.push(XNear {
+                    w,
+                    ww: w.length_squared(),
+                    len: (y - x).length(),
+                    x: ix,
+                    y: iy,
+                });
+            }
+            let rt = (t - o).length().max(ea.length());
+            let nf = project_near(&pts, &xs, f64::INFINITY, u, v, n, o, r, &mut full);
+            let nc = project_near(&pts, &xs, rt, u, v, n, o, r, &mut cut);
+            assert_eq!(nf, xs.len());
+            let pr = |p: DVec3| [(p - o).dot(u), (p - o).dot(v)];
+            let (qa, qt, qb) = (pr(pts[0]), pr(pts[1]), pr(pts[2]));
+            let edges = [(0, qa, 1, qt), (1, qt, 2, qb)];
+            let c_full = crosses_projected(&full[..nf], edges);
+            let i_full = front_inside_projected(&full[..nf], [0, 1, 2], [qa, qt, qb]);
+            assert_eq!(c_full, crosses_projected(&cut[..nc], edges));
+            assert_eq!(
+                i_full,
+                front_inside_projected(&cut[..nc], [0, 1, 2], [qa, qt, qb])
+            );
+            hits += usize::from(c_full || i_full);
+            kept += nc;
+            total += nf;
+        }
+        // The cases are not trivial: some tests fire, and the cull drops most edges.
+        assert!(hits > 300, "{hits}");
+        assert!(kept * 2 < total, "{kept} of {total}");
+    }
 }
