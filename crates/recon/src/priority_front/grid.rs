@@ -95,14 +95,26 @@ impl Lattice {
     /// `None` when the cube misses the box.
     #[inline]
     pub fn cube(&self, o: DVec3, r: f64) -> Option<[[i64; 2]; 3]> {
+        // The same ranges as clamping `floor` of the scaled ends into `0..dims`, without
+        // the floors: `floor(t) < 0 <=> t < 0`, `floor(t) > d - 1 <=> t >= d` and
+        // `floor(t) >= d - 1 <=> t >= d - 1` for integral `d`, and a cast truncates,
+        // which is `floor` for the non-negative `t` left. Finite `o` and `r` only.
+        debug_assert!(o.is_finite() && r.is_finite());
         let mut out = [[0i64; 2]; 3];
         for a in 0..3 {
-            let lo = floor((o[a] - r - self.origin[a]) * self.inv_h);
-            let hi = floor((o[a] + r - self.origin[a]) * self.inv_h);
-            if hi < 0.0 || lo > (self.dims[a] - 1) as f64 {
+            let lo = (o[a] - r - self.origin[a]) * self.inv_h;
+            let hi = (o[a] + r - self.origin[a]) * self.inv_h;
+            let top = (self.dims[a] - 1) as f64;
+            if hi < 0.0 || lo >= top + 1.0 {
                 return None;
             }
-            out[a] = [lo.max(0.0) as i64, hi.min((self.dims[a] - 1) as f64) as i64];
+            let l = if lo < 0.0 { 0 } else { lo as i64 };
+            let h = if hi >= top {
+                self.dims[a] - 1
+            } else {
+                hi as i64
+            };
+            out[a] = [l, h];
         }
         Some(out)
     }
@@ -483,6 +495,7 @@ impl FrontIndex {
     /// Collects into `out` (cleared) the chunks holding the listed points of the buckets
     /// meeting the cube `[o - r, o + r]`; [`FrontIndex::chunk`] reads them. Lets the
     /// caller scan them in a plain loop over locals (no closure captures).
+    #[inline(never)]
     pub fn chunks_near(&self, o: DVec3, r: f64, out: &mut Vec<u32>) {
         out.clear();
         let Some(q) = self.lat.cube(o, r) else {
@@ -490,11 +503,24 @@ impl FrontIndex {
         };
         for z in q[2][0]..=q[2][1] {
             for y in q[1][0]..=q[1][1] {
-                for x in q[0][0]..=q[0][1] {
-                    let mut c = self.head(self.bucket_of([x, y, z]));
-                    while c != NONE {
-                        out.push(c);
-                        c = self.pool[c as usize].next;
+                if self.dense {
+                    // The buckets of one row are contiguous in `heads`.
+                    let b0 = self.lat.linear([q[0][0], y, z]) as usize;
+                    let b1 = b0 + (q[0][1] - q[0][0]) as usize;
+                    for &h in &self.heads[b0..=b1] {
+                        let mut c = h;
+                        while c != NONE {
+                            out.push(c);
+                            c = self.pool[c as usize].next;
+                        }
+                    }
+                } else {
+                    for x in q[0][0]..=q[0][1] {
+                        let mut c = self.head(Lattice::key([x, y, z]));
+                        while c != NONE {
+                            out.push(c);
+                            c = self.pool[c as usize].next;
+                        }
                     }
                 }
             }

@@ -18,7 +18,7 @@ use std::collections::BinaryHeap;
 use glam::DVec3;
 
 use super::adjacency::Adjacency;
-use super::cross::XProj;
+use super::cross::{XNear, XProj};
 use super::grid::{FrontIndex, Grid, NONE};
 
 /// Point state `Free` (spec §3.1; the transient `Close` state is the candidate buffer).
@@ -130,6 +130,8 @@ pub(crate) struct Mesher<'g> {
     pub e_alive: Vec<bool>,
     pub e_nrm: Vec<DVec3>,
     pub e_cost: Vec<f64>,
+    /// Length of each edge slot's edge `|b - a|`.
+    pub e_len: Vec<f64>,
     free_slots: Vec<u32>,
     heap: BinaryHeap<HeapItem>,
     fifo: u64,
@@ -140,9 +142,11 @@ pub(crate) struct Mesher<'g> {
     pub fidx: FrontIndex,
     pub cand: Vec<Cand>,
     pub free_near: Vec<u32>,
-    /// Pending candidates `(score bound, point)` of the lazy evaluation (scratch).
+    /// Pending candidates `(key, point)` of the lazy evaluation (scratch; key: squared
+    /// distance to the edge midpoint, or minus the score bound for the segment distance).
     pub pend: Vec<(f64, u32)>,
-    pub xs: Vec<(u32, u32)>,
+    /// Front edges near the popped edge, with their cull data (scratch).
+    pub xs: Vec<XNear>,
     /// Front-index chunks near the popped edge (scratch).
     pub chunks: Vec<u32>,
     /// `xs` projected into the current validation plane (scratch).
@@ -194,6 +198,7 @@ impl<'g> Mesher<'g> {
             e_alive: Vec::new(),
             e_nrm: Vec::new(),
             e_cost: Vec::new(),
+            e_len: Vec::new(),
             free_slots: Vec::new(),
             heap: BinaryHeap::new(),
             fifo: 0,
@@ -284,6 +289,7 @@ impl<'g> Mesher<'g> {
     /// not linked into a loop yet.
     #[inline]
     fn new_edge(&mut self, a: u32, b: u32, nrm: DVec3, t: f64, push: bool) -> u32 {
+        let len = (self.pts[b as usize] - self.pts[a as usize]).length();
         let e = if let Some(e) = self.free_slots.pop() {
             let i = e as usize;
             self.e_a[i] = a;
@@ -293,6 +299,7 @@ impl<'g> Mesher<'g> {
             self.e_alive[i] = true;
             self.e_nrm[i] = nrm;
             self.e_cost[i] = t;
+            self.e_len[i] = len;
             e
         } else {
             self.e_a.push(a);
@@ -303,6 +310,7 @@ impl<'g> Mesher<'g> {
             self.e_alive.push(true);
             self.e_nrm.push(nrm);
             self.e_cost.push(t);
+            self.e_len.push(len);
             (self.e_a.len() - 1) as u32
         };
         self.fout[a as usize] = e;

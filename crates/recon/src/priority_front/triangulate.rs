@@ -4,7 +4,7 @@ use glam::DVec3;
 use reconbench_geom::method::{MethodError, RunCtx};
 
 use super::cross::{
-    crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project,
+    XNear, crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project_near,
 };
 use super::density::knn;
 use super::grid::NONE;
@@ -79,13 +79,16 @@ impl Mesher<'_> {
     }
 
     /// Step 1: gathers the candidates, Free points and front points (but `a`, `b`)
-    /// within R of `o`, into `pend` with their score bounds (from the distance to `o`;
-    /// the caller recomputes them for the segment distance), the Free ones also into
-    /// `free_near`, and the front edges near `o` for the crossing test into `xs`.
+    /// within R of `o`, into `pend` keyed by their squared distance to `o` (the caller
+    /// rekeys them for the segment distance), the Free ones also into
+    /// `free_near` (only with `reject_free_inside`, its one reader), and the front edges
+    /// near `o` with their cull data for the crossing test into `xs`.
+    // The steps of `triangulate` (gather, evaluate, validate, sector test) stay out of
+    // line: inlined into one body their loops spill more (3 % more instructions).
+    #[inline(never)]
     fn gather(&mut self, e: u32, a: u32, b: u32, o: DVec3) {
         let r = self.cfg.r;
         let r2 = r * r;
-        let w = self.cfg.w;
         // The output lists are moved into locals for the scans: the loops then keep
         // their lengths in registers (the scans were dominated by push bookkeeping).
         let mut free_near = std::mem::take(&mut self.free_near);
@@ -97,13 +100,17 @@ impl Mesher<'_> {
         xs.clear();
         let pts = self.pts;
         let state = &self.state;
+        // `free_near` serves only the optional Free-inside test.
+        let keep_free = self.cfg.reject_free_inside;
         self.grid.for_cells(o, r, |range| {
             for i in range {
                 if state[i] == FREE {
                     let d2 = (pts[i] - o).length_squared();
                     if d2 <= r2 {
-                        free_near.push(i as u32);
-                        pend.push((bound(w, r, d2.sqrt()), i as u32));
+                        if keep_free {
+                            free_near.push(i as u32);
+                        }
+                        pend.push((d2, i as u32));
                     }
                 }
             }
@@ -111,6 +118,7 @@ impl Mesher<'_> {
         let xr = self.cfg.cross_factor * r;
         let xr2 = xr * xr;
         let (e_a, e_b, fin, fout) = (&self.e_a, &self.e_b, &self.fin, &self.fout);
+        let e_len = &self.e_len;
         self.fidx.chunks_near(o, xr, &mut chunks);
         for &c in &chunks {
             let (ids, pos) = self.fidx.chunk(c);
@@ -120,17 +128,31 @@ impl Mesher<'_> {
                     continue;
                 }
                 if d2 <= r2 && v != a && v != b {
-                    pend.push((bound(w, r, d2.sqrt()), v));
+                    pend.push((d2, v));
                 }
                 let out = fout[v as usize];
                 if out != NONE && out != e {
-                    xs.push((v, e_b[out as usize]));
+                    xs.push(XNear {
+                        w: pv - o,
+                        ww: d2,
+                        len: e_len[out as usize],
+                        x: v,
+                        y: e_b[out as usize],
+                    });
                 }
                 let inn = fin[v as usize];
                 if inn != NONE && inn != e {
                     let u = e_a[inn as usize];
-                    if (pts[u as usize] - o).length_squared() > xr2 {
-                        xs.push((u, v));
+                    let wu = pts[u as usize] - o;
+                    let du2 = wu.length_squared();
+                    if du2 > xr2 {
+                        xs.push(XNear {
+                            w: wu,
+                            ww: du2,
+                            len: e_len[inn as usize],
+                            x: u,
+                            y: v,
+                        });
                     }
                 }
             }
@@ -157,15 +179,19 @@ impl Mesher<'_> {
                 && (self.pts[v as usize] - o).length() <= lim
                 && !self.pend.iter().any(|&(_, t)| t == v)
             {
-                let u = self.score_bound(x, v);
-                self.pend.push((u, v));
+                let key = if self.cfg.seg_dist {
+                    -self.score_bound(x, v)
+                } else {
+                    (self.pts[v as usize] - x.o).length_squared()
+                };
+                self.pend.push((key, v));
             }
         }
     }
 
     /// Steps 2-3 for candidate `t`: the rules and the score. Returns the score and the
     /// unit normal of `(a, t, b)`, or `None` when a rule removes `t`.
-    #[inline]
+    #[inline(never)]
     fn evaluate(&mut self, x: &EdgeCtx, t: u32) -> Option<(f64, DVec3)> {
         let EdgeCtx {
             a,
@@ -358,7 +384,7 @@ impl Mesher<'_> {
         if self.cfg.seg_dist {
             let mut pend = std::mem::take(&mut self.pend);
             for c in pend.iter_mut() {
-                c.0 = self.score_bound(&x, c.1);
+                c.0 = -self.score_bound(&x, c.1);
             }
             self.pend = pend;
         }
@@ -372,6 +398,10 @@ impl Mesher<'_> {
         // unevaluated candidate. The validation order is therefore exactly that of the
         // full evaluation (decreasing score, ties by lower index), but most candidates
         // of an edge are never evaluated, because the first validated one usually wins.
+        // `pend` holds keys, smallest first in U order: the squared distance to `o`
+        // (U falls with it; U is computed only for the candidate taken), or -U for the
+        // segment distance.
+        let (w, r, seg) = (self.cfg.w, self.cfg.r, self.cfg.seg_dist);
         let mut pend = std::mem::take(&mut self.pend);
         self.cand.clear();
         let mut passed = 0usize;
@@ -383,11 +413,16 @@ impl Mesher<'_> {
             while !pend.is_empty() {
                 let mut m = 0;
                 for k in 1..pend.len() {
-                    if pend[k].0 > pend[m].0 {
+                    if pend[k].0 < pend[m].0 {
                         m = k;
                     }
                 }
-                if best_score > pend[m].0 {
+                let u = if seg {
+                    -pend[m].0
+                } else {
+                    bound(w, r, pend[m].0.sqrt())
+                };
+                if best_score > u {
                     break;
                 }
                 let t = pend.swap_remove(m).1;
@@ -449,6 +484,7 @@ impl Mesher<'_> {
     }
 
     /// Crossing test and classification of candidate `c` (§4.4 Step 4, §4.5).
+    #[inline(never)]
     fn validate(&mut self, e: u32, a: u32, b: u32, o: DVec3, n_old: DVec3, c: Cand) -> Option<Op> {
         let t = c.t;
         // ASSUMPTION A14: projection plane through o, normal normalize(n_old + n_new).
@@ -457,15 +493,30 @@ impl Mesher<'_> {
             self.stats.sector_rejects += 1;
             return None;
         }
-        // The nearby front edges are projected once for both tests.
+        // The nearby front edges that can reach the triangle are projected once for both
+        // tests; the triangle lies within `rt` of `o` (`|a - o| = |b - o|`).
         let (u, v) = plane_basis(np);
-        project(self.pts, &self.xs, u, v, np, o, self.cfg.r, &mut self.xp);
+        let rt = (self.pts[t as usize] - o)
+            .length_squared()
+            .max((self.pts[a as usize] - o).length_squared())
+            .sqrt();
+        let k = project_near(
+            self.pts,
+            &self.xs,
+            rt,
+            u,
+            v,
+            np,
+            o,
+            self.cfg.r,
+            &mut self.xp,
+        );
         let pr = |i: u32| {
             let q = self.pts[i as usize] - o;
             [q.dot(u), q.dot(v)]
         };
         let (qa, qt, qb) = (pr(a), pr(t), pr(b));
-        let xp = &self.xp[..self.xs.len()];
+        let xp = &self.xp[..k];
         if crosses_projected(xp, [(a, qa, t, qt), (t, qt, b, qb)]) {
             self.stats.cross_rejects += 1;
             return None;
@@ -563,6 +614,7 @@ impl Mesher<'_> {
     /// the vertex's two front edges, in the projection plane. This catches triangles that
     /// fold over the mesh next to a reflex front vertex, which the edge-crossing test
     /// misses because edges sharing an endpoint are skipped.
+    #[inline(never)]
     fn in_sectors(&self, a: u32, b: u32, t: u32, np: DVec3) -> bool {
         let (u, v) = plane_basis(np);
         let d2 = |from: u32, to: u32| {
