@@ -172,12 +172,12 @@ fn null_vector(r0: DVec3, r1: DVec3, r2: DVec3) -> Option<DVec3> {
 /// eigenvalues: the same result as [`sym_eigen3`] (`values`, `vectors[0]`) up to
 /// rounding, several times faster.
 ///
-/// Closed form: the eigenvalues from the trigonometric solution of the characteristic
-/// cubic (Smith 1961), the eigenvector as the largest cross product of two rows of
-/// `A - l0 I`; the two larger eigenvalues are then recomputed from the 2x2 restriction of
-/// `A` to the plane orthogonal to the vector. The cubic's smallest root is only accurate to about `sqrt(eps)` when the
-/// two largest eigenvalues nearly coincide (disc-shaped neighbourhoods, i.e. most
-/// planar patches), so the vector is refined once: `l0` is replaced by the Rayleigh
+/// Method: the smallest root of the characteristic cubic by Newton's method (no
+/// trigonometric calls; the other two roots from the remaining quadratic, for the
+/// separation test only), the eigenvector as the largest cross product of two rows of
+/// `A - l0 I`, and the two larger eigenvalues recomputed from the 2x2 restriction of `A`
+/// to the plane orthogonal to the vector. Where the gap `l1 - l0` is below
+/// `REFINE_GAP_REL` (0.25 of the largest magnitude) the vector is refined once: `l0` is replaced by the Rayleigh
 /// quotient of the first vector (error quadratic in the vector's error) and the cross
 /// product repeated. Matrices whose two smallest eigenvalues are within
 /// [`SMALLEST_GAP_REL`] of each other (relative to the largest magnitude), including
