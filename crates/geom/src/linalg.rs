@@ -176,8 +176,8 @@ fn null_vector(r0: DVec3, r1: DVec3, r2: DVec3) -> Option<DVec3> {
 /// trigonometric calls; the other two roots from the remaining quadratic, for the
 /// separation test only), the eigenvector as the largest cross product of two rows of
 /// `A - l0 I`, and the two larger eigenvalues recomputed from the 2x2 restriction of `A`
-/// to the plane orthogonal to the vector. Where the gap `l1 - l0` is below
-/// `REFINE_GAP_REL` (0.25 of the largest magnitude) the vector is refined once: `l0` is replaced by the Rayleigh
+/// to the plane orthogonal to the vector. Where the gap `l1 - l0` is below 0.25 of the
+/// largest magnitude, the vector is refined once: `l0` is replaced by the Rayleigh
 /// quotient of the first vector (error quadratic in the vector's error) and the cross
 /// product repeated. Matrices whose two smallest eigenvalues are within
 /// [`SMALLEST_GAP_REL`] of each other (relative to the largest magnitude), including
