@@ -1297,8 +1297,23 @@ impl SelfKnnTree {
         // Nearest leaves first: the k-th distance falls fast, so fewer points are
         // inserted and the far leaves are skipped. The order does not change the result.
         insertion_sort_by_key(order);
+        // A tight speculative bound first: exact whenever k points lie within it (the k-th
+        // distance is then no larger), which is the common case; otherwise the loose one.
+        let t = l.rc * SPEC_RC + (q - l.c).length() * SPEC_OFFSET;
+        if t * t < b2 && self.scan_ordered(q, t * t, order, best) {
+            return;
+        }
+        let full = self.scan_ordered(q, b2, order, best);
+        debug_assert!(full);
+    }
+
+    /// The `best.len()` nearest points of `q` among those of the leaves `order` (sorted
+    /// by their box distance to `q`) within squared distance `b2`, into `best`; false
+    /// when fewer lie within it.
+    fn scan_ordered(&self, q: DVec3, b2: f64, order: &[(f64, u32)], best: &mut [Cand]) -> bool {
+        let k = best.len();
         let mut st = SelfQuery::new(best, b2);
-        for &(bound, id) in order.iter() {
+        for &(bound, id) in order {
             let leaf = &self.leaves[id as usize];
             if !st.may_enter(bound, leaf.min_index) {
                 if bound > st.worst.dist2() {
@@ -1312,9 +1327,17 @@ impl SelfKnnTree {
                 st.offer(d2, index, (lo + s) as u32);
             }
         }
-        debug_assert_eq!(st.len, k);
+        st.len == k
     }
 }
+
+/// The speculative bound of a leaf query, `SPEC_RC r_c + SPEC_OFFSET |q - c|`: it
+/// holds the k nearest for most queries of an evenly sampled surface, and a query whose
+/// k-th neighbour lies beyond it is simply rerun with the safe bound. Chosen by
+/// instruction count (callgrind, `pf` k = 16, 100k torus points; 854 M against 898 M
+/// without, the best of the (1.0-1.4) x (0-0.4) pairs tried); it never changes a result.
+const SPEC_RC: f64 = 1.15;
+const SPEC_OFFSET: f64 = 0.1;
 
 /// Sorts a short list by its first element (insertion sort: the lists hold a few dozen
 /// entries).
