@@ -180,7 +180,7 @@ fn null_vector(r0: DVec3, r1: DVec3, r2: DVec3) -> Option<DVec3> {
 /// largest magnitude, the vector is refined once: `l0` is replaced by the Rayleigh
 /// quotient of the first vector (error quadratic in the vector's error) and the cross
 /// product repeated. Matrices whose two smallest eigenvalues are within
-/// [`SMALLEST_GAP_REL`] of each other (relative to the largest magnitude), including
+/// 1e-4 of each other (relative to the largest magnitude, `SMALLEST_GAP_REL`), including
 /// every degenerate or isotropic case, are solved by [`sym_eigen3`] instead.
 ///
 /// Like [`sym_eigen3`], only the symmetric part is used and the matrix is scaled by its
