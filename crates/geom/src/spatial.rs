@@ -1199,8 +1199,8 @@ impl SelfKnnTree {
     /// point nearest the box centre, `r_c` its exact `kq`-th neighbour distance and `rho`
     /// the largest distance from `c` to a leaf point. By the triangle inequality the `kq`
     /// nearest points of any leaf point `q` lie within `|q - c| + r_c <= rho + r_c` of
-    /// `q`, so they are all in candidate leaves. The list is sorted by distance to the
-    /// leaf's box, so that the nearest points are offered first.
+    /// `q`, so they are all in candidate leaves. Each query orders the list by its own
+    /// distance to the leaves (see `scan_leaves`).
     fn load_leaf(&self, slot: usize, kq: usize, s: &mut SelfScratch) {
         let me = self.leaves[self.leaf_of(slot)];
         let leaf = &self.items[me.lo as usize..me.hi as usize];
@@ -1386,6 +1386,6 @@ struct LeafCands {
     /// The leaf point the list was built around and its k-th neighbour distance.
     c: DVec3,
     rc: f64,
-    /// (squared box gap, leaf id), nearest first.
+    /// (squared gap to the leaf's box, candidate leaf id), in tree order.
     ids: Vec<(f64, u32)>,
 }
