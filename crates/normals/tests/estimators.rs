@@ -266,3 +266,43 @@ fn degenerate_inputs_give_errors_or_zero_normals_not_panics() {
         );
     }
 }
+
+/// The fused `pf` fit over kNN hits gives bit for bit the normal of the general
+/// weighted fit over the row (point itself first), also where exact duplicates move the
+/// point out of first place or out of its own result.
+#[test]
+fn fused_pf_fit_equals_the_row_fit_bit_for_bit() {
+    use reconbench_geom::spatial::knn_self_map;
+    use reconbench_normals::neighbors::row_points;
+    use reconbench_normals::plane_fit::{plane_normal_of, unweighted_normal_of_hits};
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut pts: Vec<DVec3> = (0..3000)
+        .map(|_| {
+            let (u, v): (f64, f64) = (rng.random_range(0.0..TAU), rng.random_range(0.0..TAU));
+            let c = 1.0 + 0.4 * v.cos();
+            DVec3::new(c * u.cos(), c * u.sin(), 0.4 * v.sin())
+        })
+        .collect();
+    // Twenty copies of a few points, so some rows are all duplicates of the point.
+    for j in 0..5 {
+        let p = pts[j * 100];
+        pts.extend(std::iter::repeat_n(p, 20));
+    }
+    for k in [3, 16, 30] {
+        let mismatches = knn_self_map(
+            &pts,
+            k,
+            false,
+            || (),
+            |_, i, hits| {
+                let fused = unweighted_normal_of_hits(hits);
+                let row = plane_normal_of(row_points(&pts, i, hits), |_| 1.0);
+                (fused.to_array().map(f64::to_bits) != row.to_array().map(f64::to_bits)) as usize
+            },
+        )
+        .unwrap()
+        .into_iter()
+        .sum::<usize>();
+        assert_eq!(mismatches, 0, "k = {k}");
+    }
+}
