@@ -1234,7 +1234,7 @@ impl SelfKnnTree {
         l.usable = self.gather(0, 0, self.items.len(), 0, &me, r * r, cap, &mut l.ids);
     }
 
-    /// Appends to `out` (gap, id) for every leaf of the subtree over slots `lo..hi`
+    /// Appends to `out` the id of every leaf of the subtree over slots `lo..hi`
     /// (whose first leaf has id `first`) within squared distance `r2` of leaf `me`'s
     /// box; false (and stops) once more than `cap` are found.
     #[allow(clippy::too_many_arguments)]
@@ -1247,13 +1247,12 @@ impl SelfKnnTree {
         me: &SelfLeaf,
         r2: f64,
         cap: usize,
-        out: &mut Vec<(f64, u32)>,
+        out: &mut Vec<u32>,
     ) -> bool {
         if hi - lo <= SELF_LEAF {
             let l = &self.leaves[first];
-            let gap = box_gap2(me.bmin, me.bmax, l.bmin, l.bmax);
-            if gap <= r2 {
-                out.push((gap, first as u32));
+            if box_gap2(me.bmin, me.bmax, l.bmin, l.bmax) <= r2 {
+                out.push(first as u32);
             }
             return out.len() <= cap;
         }
@@ -1289,7 +1288,7 @@ impl SelfKnnTree {
         let b = ((q - l.c).length() + l.rc) * (1.0 + 1e-9);
         let b2 = b * b;
         order.clear();
-        for &(_, id) in &l.ids {
+        for &id in &l.ids {
             let leaf = &self.leaves[id as usize];
             // The box distance never exceeds a computed point distance (rounding is
             // monotone), so skipping on it is exact.
@@ -1386,6 +1385,6 @@ struct LeafCands {
     /// The leaf point the list was built around and its k-th neighbour distance.
     c: DVec3,
     rc: f64,
-    /// (squared gap to the leaf's box, candidate leaf id), in tree order.
-    ids: Vec<(f64, u32)>,
+    /// Candidate leaf ids, in tree order.
+    ids: Vec<u32>,
 }
