@@ -1292,10 +1292,7 @@ impl SelfKnnTree {
             let leaf = &self.leaves[id as usize];
             // The box distance never exceeds a computed point distance (rounding is
             // monotone), so skipping on it is exact.
-            let bound = (leaf.bmin - q)
-                .max(q - leaf.bmax)
-                .max(DVec3::ZERO)
-                .length_squared();
+            let bound = box_gap2(q, q, leaf.bmin, leaf.bmax);
             if bound <= b2 {
                 order.push((bound, id));
             }
