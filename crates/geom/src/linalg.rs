@@ -186,15 +186,87 @@ fn null_vector(r0: DVec3, r1: DVec3, r2: DVec3) -> Option<DVec3> {
 /// Like [`sym_eigen3`], only the symmetric part is used and the matrix is scaled by its
 /// largest entry. Errors: as [`sym_eigen3`].
 pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
-    let full = |m: DMat3| {
-        sym_eigen3(m).map(|e| SmallestEigen3 {
-            values: e.values,
-            vector: e.vectors[0],
-        })
+    match smallest_fast(m)? {
+        Some(f) => Ok(f.with_values()),
+        None => full_smallest(m),
+    }
+}
+
+/// The smallest eigenvalue's unit eigenvector of the symmetric 3x3 matrix `m` when the
+/// middle eigenvalue exceeds `min_ratio` times the largest (the points span a plane),
+/// else `None`: exactly `sym_eigen3_smallest(m)` followed by the test
+/// `values[1] > min_ratio * max(values[2], f64::MIN_POSITIVE)`, the same vector bit for
+/// bit.
+///
+/// Why: PCA normals need the vector and that test only. Where the fast path applies,
+/// the test cannot fail for `min_ratio <= 1e-6` (the gap test gives
+/// `l1 >= 1e-4 max|l|` with `l0 >= 0`), so the two larger eigenvalues are not computed,
+/// which is most of the cost after the vector.
+///
+/// Errors: as [`sym_eigen3_smallest`].
+pub fn sym_eigen3_smallest_planar(m: DMat3, min_ratio: f64) -> Result<Option<DVec3>> {
+    let planar = |e: SmallestEigen3| {
+        (e.values[1] > min_ratio * e.values[2].max(f64::MIN_POSITIVE)).then_some(e.vector)
     };
+    match smallest_fast(m)? {
+        Some(f) if f.l0 >= 0.0 && min_ratio <= PLANAR_FAST_RATIO_MAX => {
+            Ok(Some(canonical_sign(f.vector)))
+        }
+        Some(f) => Ok(planar(f.with_values())),
+        None => full_smallest(m).map(planar),
+    }
+}
+
+/// Largest `min_ratio` for which [`sym_eigen3_smallest_planar`] may skip the two larger
+/// eigenvalues: with `l0 >= 0` and `l1 - l0 > SMALLEST_GAP_REL max|l|`, the ratio
+/// `l1 / l2` is at least about `SMALLEST_GAP_REL / 3`.
+const PLANAR_FAST_RATIO_MAX: f64 = 1e-6;
+
+/// [`sym_eigen3`]'s smallest eigenpair and values, for matrices the fast path hands on.
+fn full_smallest(m: DMat3) -> Result<SmallestEigen3> {
+    sym_eigen3(m).map(|e| SmallestEigen3 {
+        values: e.values,
+        vector: e.vectors[0],
+    })
+}
+
+/// The fast path's result: the (unsigned) unit vector of the smallest eigenvalue `l0` of
+/// the scaled matrix `a = sym(m) / scale`.
+struct FastSmallest {
+    a: DMat3,
+    scale: f64,
+    l0: f64,
+    vector: DVec3,
+}
+
+impl FastSmallest {
+    /// All three eigenvalues: the other two from the 2x2 restriction of `a` to the plane
+    /// orthogonal to the vector (stable even when they nearly coincide, where the cubic's
+    /// roots are not).
+    fn with_values(&self) -> SmallestEigen3 {
+        let (a, v) = (self.a, self.vector);
+        let (e1, e2) = v.any_orthonormal_pair();
+        let (ae1, ae2) = (a * e1, a * e2);
+        let (b11, b22, b12) = (e1.dot(ae1), e2.dot(ae2), e1.dot(ae2));
+        let mean = 0.5 * (b11 + b22);
+        let half = 0.5 * (b11 - b22);
+        let rad = (half * half + b12 * b12).sqrt();
+        let (l1, l2) = (mean - rad, mean + rad);
+        let l0 = v.dot(a * v).min(l1);
+        let scale = self.scale;
+        SmallestEigen3 {
+            values: [l0 * scale, l1 * scale, l2 * scale],
+            vector: canonical_sign(v),
+        }
+    }
+}
+
+/// The closed-form part of [`sym_eigen3_smallest`]; `None` where the matrix goes to the
+/// iterative solver (zero, not separated, no converged root or null vector).
+fn smallest_fast(m: DMat3) -> Result<Option<FastSmallest>> {
     let (sym, scale) = symmetrized(m)?;
     if scale == 0.0 {
-        return full(m);
+        return Ok(None);
     }
     let a = sym * (1.0 / scale);
     let (a00, a11, a22) = (a.x_axis.x, a.y_axis.y, a.z_axis.z);
@@ -205,10 +277,10 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
     let c0 = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02)
         + a02 * (a01 * a12 - a11 * a02);
     let Some(l0) = smallest_root(c2, c1, c0) else {
-        return full(m);
+        return Ok(None);
     };
     // The two others from the remaining quadratic l^2 - s l + t (only for the
-    // separation test; the returned values come from the 2x2 restriction below).
+    // separation test; reported values come from `FastSmallest::with_values`).
     let s = c2 - l0;
     let t = c1 - l0 * s;
     let disc = 0.25 * s * s - t;
@@ -220,7 +292,7 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
     // Written so that a NaN (not expected for finite input) also takes the fallback.
     let separated = l1 - l0 > SMALLEST_GAP_REL * mag;
     if !separated {
-        return full(m);
+        return Ok(None);
     }
     let rows = |l: f64| {
         (
@@ -231,35 +303,26 @@ pub fn sym_eigen3_smallest(m: DMat3) -> Result<SmallestEigen3> {
     };
     let (r0, r1, r2) = rows(l0);
     let Some(v) = null_vector(r0, r1, r2) else {
-        return full(m);
+        return Ok(None);
     };
-    let rayleigh = |v: DVec3| v.dot(a * v);
     // Newton's root is accurate to rounding, so the vector's error is about
     // eps / gap^2 (relative to |l|max); where the gap is small the vector is refined once
     // from the Rayleigh quotient, whose error is quadratic in the vector's.
-    let v = if l1 - l0 > REFINE_GAP_REL * mag {
+    let vector = if l1 - l0 > REFINE_GAP_REL * mag {
         v
     } else {
-        let (r0, r1, r2) = rows(rayleigh(v));
+        let (r0, r1, r2) = rows(v.dot(a * v));
         match null_vector(r0, r1, r2) {
             Some(v) => v,
-            None => return full(m),
+            None => return Ok(None),
         }
     };
-    // The other two eigenvalues from the 2x2 restriction of A to the plane orthogonal
-    // to v (stable even when they nearly coincide, where the cubic's roots are not).
-    let (e1, e2) = v.any_orthonormal_pair();
-    let (ae1, ae2) = (a * e1, a * e2);
-    let (b11, b22, b12) = (e1.dot(ae1), e2.dot(ae2), e1.dot(ae2));
-    let mean = 0.5 * (b11 + b22);
-    let half = 0.5 * (b11 - b22);
-    let rad = (half * half + b12 * b12).sqrt();
-    let (l1, l2) = (mean - rad, mean + rad);
-    let l0 = rayleigh(v).min(l1);
-    Ok(SmallestEigen3 {
-        values: [l0 * scale, l1 * scale, l2 * scale],
-        vector: canonical_sign(v),
-    })
+    Ok(Some(FastSmallest {
+        a,
+        scale,
+        l0,
+        vector,
+    }))
 }
 
 /// Eigenvalue gap (relative to the largest magnitude) above which the eigenvector from

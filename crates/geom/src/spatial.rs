@@ -1016,6 +1016,30 @@ impl<'a> SelfQuery<'a> {
         Cand::floor(bound, min_index).0 < (self.worst.0 & !(u32::MAX as u128))
     }
 
+    /// Offers the points of one leaf (at most [`SELF_LEAF`], starting at tree slot
+    /// `lo`) to the query at `q`. The distances come first, then only the points within
+    /// the current bound are offered: that filter is branch-free, so its unpredictable
+    /// outcome costs no misprediction.
+    #[inline]
+    fn offer_leaf(&mut self, q: DVec3, pts: &[(DVec3, u32)], lo: usize) {
+        let w = self.worst.dist2();
+        let mut d2s = [0.0f64; SELF_LEAF];
+        let mut pass = [0u8; SELF_LEAF];
+        let mut m = 0;
+        for (s, it) in pts.iter().enumerate() {
+            // Same expression as everywhere else in this module, so distances (and
+            // therefore ties) agree bit for bit with PointIndex and brute force.
+            let d2 = (q - it.0).length_squared();
+            d2s[s] = d2;
+            pass[m] = s as u8;
+            m += (d2 <= w) as usize;
+        }
+        for &s in &pass[..m] {
+            let s = s as usize;
+            self.offer(d2s[s], pts[s].1, (lo + s) as u32);
+        }
+    }
+
     #[inline]
     fn offer(&mut self, dist2: f64, index: u32, slot: u32) {
         let c = Cand::new(dist2, index, slot);
@@ -1124,8 +1148,8 @@ impl SelfKnnTree {
     ) {
         if hi - lo <= SELF_LEAF {
             for (s, &(p, index)) in self.items[lo..hi].iter().enumerate() {
-                // Same expression as everywhere else in this module, so distances (and
-                // therefore ties) agree bit for bit with PointIndex and brute force.
+                // Same expression as in `offer_leaf`, so distances (and therefore ties)
+                // agree bit for bit with PointIndex and brute force.
                 let d2 = (q - p).length_squared();
                 st.offer(d2, index, (lo + s) as u32);
             }
@@ -1232,6 +1256,16 @@ impl SelfKnnTree {
         l.ids.clear();
         let cap = LEAF_CANDS_BASE + kq.div_ceil(SELF_LEAF) * LEAF_CANDS_PER_K;
         l.usable = self.gather(0, 0, self.items.len(), 0, &me, r * r, cap, &mut l.ids);
+        // The speculative bound of every leaf query is at most `t`, so its leaves are the
+        // listed ones within `t` of the box.
+        let t = (rc * SPEC_RC + rho * SPEC_OFFSET) * (1.0 + 1e-9);
+        l.spec_ids.clear();
+        if l.usable {
+            l.spec_ids.extend(l.ids.iter().copied().filter(|&id| {
+                let leaf = &self.leaves[id as usize];
+                box_gap2(me.bmin, me.bmax, leaf.bmin, leaf.bmax) <= t * t
+            }));
+        }
     }
 
     /// Appends to `out` the id of every leaf of the subtree over slots `lo..hi`
@@ -1285,10 +1319,30 @@ impl SelfKnnTree {
         best: &mut Vec<Cand>,
     ) {
         best.resize(k, Cand(0));
-        let b = ((q - l.c).length() + l.rc) * (1.0 + 1e-9);
+        let dq = (q - l.c).length();
+        let b = (dq + l.rc) * (1.0 + 1e-9);
         let b2 = b * b;
+        // A tight speculative bound first: exact whenever k points lie within it (the k-th
+        // distance is then no larger), which is the common case; otherwise the loose one.
+        let t = l.rc * SPEC_RC + dq * SPEC_OFFSET;
+        let t2 = t * t;
+        if t2 < b2 {
+            self.order_leaves(q, t2, &l.spec_ids, order);
+            if self.scan_ordered(q, t2, order, best) {
+                return;
+            }
+        }
+        self.order_leaves(q, b2, &l.ids, order);
+        let full = self.scan_ordered(q, b2, order, best);
+        debug_assert!(full);
+    }
+
+    /// The leaves `ids` within squared distance `b2` of `q` into `order`,
+    /// nearest first: the k-th distance then falls fast, so fewer points are inserted and
+    /// the far leaves are skipped. The order does not change the result.
+    fn order_leaves(&self, q: DVec3, b2: f64, ids: &[u32], order: &mut Vec<(f64, u32)>) {
         order.clear();
-        for &id in &l.ids {
+        for &id in ids {
             let leaf = &self.leaves[id as usize];
             // The box distance never exceeds a computed point distance (rounding is
             // monotone), so skipping on it is exact.
@@ -1297,17 +1351,7 @@ impl SelfKnnTree {
                 order.push((bound, id));
             }
         }
-        // Nearest leaves first: the k-th distance falls fast, so fewer points are
-        // inserted and the far leaves are skipped. The order does not change the result.
         insertion_sort_by_key(order);
-        // A tight speculative bound first: exact whenever k points lie within it (the k-th
-        // distance is then no larger), which is the common case; otherwise the loose one.
-        let t = l.rc * SPEC_RC + (q - l.c).length() * SPEC_OFFSET;
-        if t * t < b2 && self.scan_ordered(q, t * t, order, best) {
-            return;
-        }
-        let full = self.scan_ordered(q, b2, order, best);
-        debug_assert!(full);
     }
 
     /// The `best.len()` nearest points of `q` among those of the leaves `order` (sorted
@@ -1325,10 +1369,7 @@ impl SelfKnnTree {
                 continue;
             }
             let (lo, hi) = (leaf.lo as usize, leaf.hi as usize);
-            for (s, &(p, index)) in self.items[lo..hi].iter().enumerate() {
-                let d2 = (q - p).length_squared();
-                st.offer(d2, index, (lo + s) as u32);
-            }
+            st.offer_leaf(q, &self.items[lo..hi], lo);
         }
         st.len == k
     }
@@ -1384,4 +1425,6 @@ struct LeafCands {
     rc: f64,
     /// Candidate leaf ids, in tree order.
     ids: Vec<u32>,
+    /// Those within the largest speculative bound of the box (see `scan_leaves`).
+    spec_ids: Vec<u32>,
 }

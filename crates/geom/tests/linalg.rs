@@ -1,7 +1,7 @@
 //! Eigen-decomposition, covariance and least squares against known solutions.
 
 use reconbench_geom::linalg::{
-    covariance, sym_eigen3, sym_eigen3_smallest, weighted_least_squares,
+    covariance, sym_eigen3, sym_eigen3_smallest, sym_eigen3_smallest_planar, weighted_least_squares,
 };
 use reconbench_geom::{DVec3, GeomError};
 
@@ -362,4 +362,59 @@ fn smallest_eigenpair_matches_the_iterative_solver() {
     assert!(sym_eigen3_smallest(DMat3::from_diagonal(DVec3::new(f64::NAN, 1.0, 2.0))).is_err());
     let z = sym_eigen3_smallest(DMat3::ZERO).unwrap();
     assert_eq!((z.values, z.vector), ([0.0; 3], DVec3::X));
+}
+
+/// `sym_eigen3_smallest_planar` is `sym_eigen3_smallest` plus the plane test, bit for
+/// bit: on its fast path it skips the two larger eigenvalues, which must never change
+/// the answer (including where the test fails: collinear, coincident, negative-definite
+/// and rank-one matrices, and ratios above the fast path's limit).
+#[test]
+fn planar_smallest_vector_equals_the_full_answer() {
+    let mut rng = Rng(23);
+    let spectra: [[f64; 3]; 10] = [
+        [0.0, 1.0, 2.0],
+        [1e-9, 0.3, 1.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 1e-13, 1.0],
+        [0.0, 1e-7, 1.0],
+        [-1.0, -0.5, 1.0],
+        [-2.0, -1.0, -0.5],
+        [-1e-15, 1e-5, 1.0],
+        [1.0, 1.0, 1.0],
+        [0.0, 0.0, 0.0],
+    ];
+    let mut mats: Vec<DMat3> = spectra.iter().map(|&l| spectrum(&mut rng, l)).collect();
+    for _ in 0..500 {
+        let s = DVec3::new(rng.f64(), rng.f64(), rng.f64() * 0.1);
+        let pts: Vec<DVec3> = (0..16)
+            .map(|_| DVec3::new(rng.f64() - 0.5, rng.f64() - 0.5, rng.f64() - 0.5) * s)
+            .collect();
+        mats.push(covariance(&pts, None).unwrap().matrix);
+        let l = [rng.f64() - 0.5, rng.f64(), rng.f64() + 1.0];
+        mats.push(spectrum(&mut rng, l));
+    }
+    let mut fast_and_planar = 0;
+    for m in mats {
+        let e = sym_eigen3_smallest(m).unwrap();
+        for ratio in [1e-12, 1e-6, 1e-4, 0.5] {
+            let expected =
+                (e.values[1] > ratio * e.values[2].max(f64::MIN_POSITIVE)).then_some(e.vector);
+            let got = sym_eigen3_smallest_planar(m, ratio).unwrap();
+            assert_eq!(
+                got.map(|v| v.to_array().map(f64::to_bits)),
+                expected.map(|v| v.to_array().map(f64::to_bits)),
+                "ratio {ratio}, values {:?}, matrix {m:?}",
+                e.values
+            );
+            fast_and_planar += usize::from(got.is_some());
+        }
+    }
+    assert!(
+        fast_and_planar > 1000,
+        "only {fast_and_planar} planar answers"
+    );
+    assert!(
+        sym_eigen3_smallest_planar(DMat3::from_diagonal(DVec3::new(1.0, f64::NAN, 2.0)), 1e-12)
+            .is_err()
+    );
 }

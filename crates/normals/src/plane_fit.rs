@@ -6,7 +6,7 @@
 
 use glam::{DMat3, DVec3};
 use reconbench_geom::PointCloud;
-use reconbench_geom::linalg::sym_eigen3_smallest;
+use reconbench_geom::linalg::sym_eigen3_smallest_planar;
 use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
 use reconbench_geom::spatial::KnnHit;
 use serde::{Deserialize, Serialize};
@@ -155,8 +155,8 @@ pub fn unweighted_normal_of_hits(hits: &[KnnHit]) -> DVec3 {
 /// The plane normal of a covariance matrix: the smallest eigenvalue's eigenvector, zero
 /// when the two largest eigenvalues do not span a plane (coincident or collinear points).
 pub fn normal_of_covariance(m: DMat3) -> DVec3 {
-    match sym_eigen3_smallest(m) {
-        Ok(e) if e.values[1] > DEGENERATE_REL * e.values[2].max(f64::MIN_POSITIVE) => e.vector,
+    match sym_eigen3_smallest_planar(m, DEGENERATE_REL) {
+        Ok(Some(v)) => v,
         _ => DVec3::ZERO,
     }
 }
