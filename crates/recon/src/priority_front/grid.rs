@@ -596,7 +596,7 @@ mod tests {
 
     #[test]
     fn front_index_matches_brute_force_sparse() {
-        churn(0.02, false);
+        churn(0.2, false);
     }
 
     #[test]
