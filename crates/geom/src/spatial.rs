@@ -1258,7 +1258,7 @@ impl SelfKnnTree {
         l.usable = self.gather(0, 0, self.items.len(), 0, &me, r * r, cap, &mut l.ids);
         // The speculative bound of every leaf query is at most `t`, so its leaves are the
         // listed ones within `t` of the box.
-        let t = (rc * SPEC_RC + rho * SPEC_OFFSET) * (1.0 + 1e-9);
+        let t = spec_bound(rc, rho) * (1.0 + 1e-9);
         l.spec_ids.clear();
         if l.usable {
             l.spec_ids.extend(l.ids.iter().copied().filter(|&id| {
@@ -1324,7 +1324,7 @@ impl SelfKnnTree {
         let b2 = b * b;
         // A tight speculative bound first: exact whenever k points lie within it (the k-th
         // distance is then no larger), which is the common case; otherwise the loose one.
-        let t = l.rc * SPEC_RC + dq * SPEC_OFFSET;
+        let t = spec_bound(l.rc, dq);
         let t2 = t * t;
         if t2 < b2 {
             self.order_leaves(q, t2, &l.spec_ids, order);
@@ -1382,6 +1382,14 @@ impl SelfKnnTree {
 /// without, the best of the (1.0-1.4) x (0-0.4) pairs tried); it never changes a result.
 const SPEC_RC: f64 = 1.15;
 const SPEC_OFFSET: f64 = 0.1;
+
+/// The speculative bound for a query at distance `d` from `c`. One expression for the
+/// queries and for the leaf's speculative list: it is monotone in `d`, so the bound at
+/// the leaf radius is never below a query's.
+#[inline]
+fn spec_bound(rc: f64, d: f64) -> f64 {
+    rc * SPEC_RC + d * SPEC_OFFSET
+}
 
 /// Sorts a short list by its first element (insertion sort: the lists hold a few dozen
 /// entries).
