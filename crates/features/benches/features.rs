@@ -57,7 +57,7 @@ fn report(name: &str, d: &dyn FeatureDetector, cloud: &PointCloud) {
         "{name}: {} points, {:.3} s total, phases {:?}, diagnostics {:?}",
         cloud.len(),
         t0.elapsed().as_secs_f64(),
-        ctx.timer.phases,
+        ctx.phases(),
         out.diagnostics
     );
 }

@@ -68,7 +68,7 @@ fn main() {
                 num(dg, "isolated_removed"),
                 num(dg, "passes"),
                 1e6 * wall / n as f64,
-                ctx.timer.phases
+                ctx.phases()
             );
             let g = GaussMap::new(GaussMapParams {
                 flat_min_sine: fms,

@@ -42,6 +42,6 @@ fn main() {
         if adaptive { "adaptive" } else { "gauss-map" },
         t.elapsed().as_secs_f64(),
         out.diagnostics.get("features"),
-        ctx.timer.phases
+        ctx.phases()
     );
 }

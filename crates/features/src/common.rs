@@ -51,9 +51,7 @@ where
         ctx.progress(end as f64 / n as f64);
         start = end;
     }
-    ctx.timer
-        .phases
-        .push((phase.to_string(), t0.elapsed().as_secs_f64()));
+    ctx.record_phase(phase, t0.elapsed().as_secs_f64());
     Ok(out)
 }
 

@@ -21,7 +21,8 @@ use glam::{DMat3, DVec3};
 use reconbench_geom::PointCloud;
 use reconbench_geom::linalg::sym_eigen3;
 use reconbench_geom::method::{
-    Diagnostic, Diagnostics, FeatureClass, FeatureDetector, FeatureLabels, MethodError, RunCtx,
+    Describe, Diagnostic, Diagnostics, FeatureClass, FeatureDetector, FeatureLabels, MethodError,
+    ParamDoc, RunCtx, Unit,
 };
 use serde::{Deserialize, Serialize};
 
@@ -68,8 +69,8 @@ pub struct GaussTest {
     pub min_clusters: usize,
     /// Most surviving clusters for a feature.
     pub max_clusters: usize,
-    /// Triangles with `|n| <= eps_deg |u| |v|` (sine of the angle at p) are skipped.
-    pub eps_deg: f64,
+    /// Triangles with `|n| <= eps_sine |u| |v|` (sine of the angle at p) are skipped.
+    pub eps_sine: f64,
 }
 
 /// Which stage decided a point.
@@ -140,9 +141,9 @@ impl GaussTest {
             for &(v, vl) in &offs[a + 1..] {
                 let n = u.cross(v);
                 let nl = n.length();
-                // ASSUMPTION W-02: skip (near-)collinear triples, |n| <= eps_deg |u||v|
+                // ASSUMPTION W-02: skip (near-)collinear triples, |n| <= eps_sine |u||v|
                 // (sine of the angle at p); zero-area triangles from duplicates included.
-                if nl > self.eps_deg * ul * vl {
+                if nl > self.eps_sine * ul * vl {
                     ws.lines.push(n / nl);
                     ws.sines.push(nl / (ul * vl));
                 }
@@ -245,11 +246,11 @@ impl GaussTest {
     /// Checks the shared settings.
     pub fn validate(&self) -> Result<(), MethodError> {
         if let Some(t) = self.flat_tau {
-            check_range("flat_tau", t, 0.0, FRAC_PI_2)?;
+            check_range("flat_tau_rad", t, 0.0, FRAC_PI_2)?;
         }
         check_range("min_cluster_frac", self.min_cluster_frac, 0.0, 1.0)?;
         check_range("flat_min_sine", self.flat_min_sine, 0.0, 1.0)?;
-        check_range("eps_deg", self.eps_deg, 0.0, 1.0)?;
+        check_range("eps_sine", self.eps_sine, 0.0, 1.0)?;
         if self.min_clusters == 0 || self.max_clusters < self.min_clusters {
             return Err(bad_param(
                 "max_clusters",
@@ -298,9 +299,11 @@ pub struct GaussMapParams {
     pub k: usize,
     /// Clustering stop distance sigma in radians, `[0, pi/2]`. ASSUMPTION W-08 default 0.6
     /// (the thesis's cube optimum; fandisk 0.7).
+    #[serde(rename = "sigma_rad", alias = "sigma")]
     pub sigma: f64,
     /// Flatness threshold in radians; thesis "15 %, about 13 degrees" = 0.15 pi/2 =
     /// 0.2356 (ASSUMPTION W-05). Negative disables the pre-test (ablation; slower).
+    #[serde(rename = "flat_tau_rad", alias = "flat_tau")]
     pub flat_tau: f64,
     /// Flatness reference line: `principal-axis` (default), `medoid` or `mean`
     /// (ASSUMPTION W-04).
@@ -323,7 +326,8 @@ pub struct GaussMapParams {
     pub max_clusters: usize,
     /// Degenerate-triangle threshold on the sine of the angle at p (ASSUMPTION W-02:
     /// 1e-6).
-    pub eps_deg: f64,
+    #[serde(alias = "eps_deg")]
+    pub eps_sine: f64,
 }
 
 impl Default for GaussMapParams {
@@ -338,7 +342,7 @@ impl Default for GaussMapParams {
             min_cluster_abs: 3,
             min_clusters: 2,
             max_clusters: 4,
-            eps_deg: 1e-6,
+            eps_sine: 1e-6,
         }
     }
 }
@@ -354,7 +358,7 @@ impl GaussMapParams {
             min_cluster_abs: self.min_cluster_abs,
             min_clusters: self.min_clusters,
             max_clusters: self.max_clusters,
-            eps_deg: self.eps_deg,
+            eps_sine: self.eps_sine,
         }
     }
 
@@ -366,9 +370,9 @@ impl GaussMapParams {
                 format!("must be at least 2, got {}", self.k),
             ));
         }
-        check_range("sigma", self.sigma, 0.0, FRAC_PI_2)?;
+        check_range("sigma_rad", self.sigma, 0.0, FRAC_PI_2)?;
         if !self.flat_tau.is_finite() {
-            return Err(bad_param("flat_tau", "must be finite"));
+            return Err(bad_param("flat_tau_rad", "must be finite"));
         }
         self.test().validate()
     }
@@ -439,9 +443,85 @@ pub(crate) fn stage_counts(outcomes: &[PointOutcome], prefix: &str, diagnostics:
     );
 }
 
+/// Docs of the flatness and cluster settings `gauss-map` and `gauss-map-adaptive` share.
+pub(crate) const FLAT_DOCS: [ParamDoc; 8] = [
+    ParamDoc::new(
+        "flat_tau_rad",
+        Unit::Rad,
+        "flatness pre-test threshold (ASSUMPTION W-05: 0.15 pi/2); negative disables it",
+    ),
+    ParamDoc::new(
+        "flat_reference",
+        Unit::Choice,
+        "flatness reference line: principal-axis, medoid or mean (ASSUMPTION W-04)",
+    ),
+    ParamDoc::new(
+        "flat_min_sine",
+        Unit::None,
+        "ASSUMPTION W-18: sine floor for triangles in the flatness statistic (default 0.2, a deviation; 0 = all, spec-literal)",
+    ),
+    ParamDoc::new(
+        "min_cluster_frac",
+        Unit::Fraction,
+        "drop clusters smaller than this share of the normals (ASSUMPTION W-06: 0.10)",
+    ),
+    ParamDoc::new(
+        "min_cluster_abs",
+        Unit::Count,
+        "drop clusters with fewer normals (ASSUMPTION W-06: 3)",
+    ),
+    ParamDoc::new(
+        "min_clusters",
+        Unit::Count,
+        "fewest surviving clusters for a feature (thesis: 2)",
+    ),
+    ParamDoc::new(
+        "max_clusters",
+        Unit::Count,
+        "most surviving clusters for a feature (thesis: 4)",
+    ),
+    ParamDoc::new(
+        "eps_sine",
+        Unit::None,
+        "degenerate-triangle threshold on the sine of the angle at p (ASSUMPTION W-02)",
+    ),
+];
+
+impl Describe for GaussMap {
+    const NAME: &'static str = "gauss-map";
+    const SOURCE: &'static str = "seed 002 §3";
+    const SUMMARY: &'static str = "Gauss-map clustering, global method (Weber 2011 ch. 3.4-3.5)";
+    type Params = GaussMapParams;
+    const PARAMS: &'static [ParamDoc] = &[
+        ParamDoc::new(
+            "k",
+            Unit::Count,
+            "neighbours, the point excluded (ASSUMPTION W-01/W-08: 16)",
+        ),
+        ParamDoc::new(
+            "sigma_rad",
+            Unit::Rad,
+            "average-linkage stop distance on the Gauss sphere (ASSUMPTION W-08: 0.6)",
+        ),
+        FLAT_DOCS[0],
+        FLAT_DOCS[1],
+        FLAT_DOCS[2],
+        FLAT_DOCS[3],
+        FLAT_DOCS[4],
+        FLAT_DOCS[5],
+        FLAT_DOCS[6],
+        FLAT_DOCS[7],
+    ];
+
+    fn from_params(params: GaussMapParams) -> Result<Self, MethodError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
 impl FeatureDetector for GaussMap {
     fn name(&self) -> &str {
-        "gauss-map"
+        Self::NAME
     }
 
     fn detect(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<FeatureLabels, MethodError> {

@@ -22,14 +22,15 @@ use std::time::Instant;
 use rayon::prelude::*;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{
-    Diagnostic, Diagnostics, FeatureClass, FeatureDetector, FeatureLabels, MethodError, RunCtx,
+    Describe, Diagnostic, Diagnostics, FeatureClass, FeatureDetector, FeatureLabels, MethodError,
+    ParamDoc, RunCtx, Unit,
 };
 use serde::{Deserialize, Serialize};
 
 use crate::common::{bad_param, check_range, count_labels, knn_excluding_self, num};
 use crate::gauss_map::{
-    FlatReference, GaussTest, GaussWorkspace, PointOutcome, THESIS_FLAT_TAU, stage_counts,
-    test_all, trivial_labels,
+    FLAT_DOCS, FlatReference, GaussTest, GaussWorkspace, PointOutcome, THESIS_FLAT_TAU,
+    stage_counts, test_all, trivial_labels,
 };
 
 thread_local! {
@@ -45,6 +46,7 @@ pub struct GaussMapAdaptiveParams {
     /// Initial (and first-pass) neighbourhood size; thesis 20 (§3.7.4).
     pub k0: usize,
     /// Initial (and first-pass) clustering distance; thesis 0.1 (§3.7.4).
+    #[serde(rename = "sigma0_rad", alias = "sigma0")]
     pub sigma0: f64,
     /// Factor applied to sigma per refinement step; thesis 1.10 ("raise sigma by 10 %").
     pub sigma_growth: f64,
@@ -54,6 +56,7 @@ pub struct GaussMapAdaptiveParams {
     /// candidates; thesis 0.30.
     pub stop_share: f64,
     /// Refinement of a candidate stops once sigma would exceed this; thesis 1.2.
+    #[serde(rename = "sigma_max_rad", alias = "sigma_max")]
     pub sigma_max: f64,
     /// Floor of k; thesis 8.
     pub k_min: usize,
@@ -77,6 +80,7 @@ pub struct GaussMapAdaptiveParams {
     /// `ceil(stop_share * k)`.
     pub recount_with_current_k: bool,
     /// Flatness threshold in radians (ASSUMPTION W-05: 0.15 pi/2); negative disables it.
+    #[serde(rename = "flat_tau_rad", alias = "flat_tau")]
     pub flat_tau: f64,
     /// Flatness reference line (ASSUMPTION W-04).
     pub flat_reference: FlatReference,
@@ -92,7 +96,8 @@ pub struct GaussMapAdaptiveParams {
     /// Most surviving clusters for a feature (thesis: 4).
     pub max_clusters: usize,
     /// Degenerate-triangle threshold (ASSUMPTION W-02: 1e-6).
-    pub eps_deg: f64,
+    #[serde(alias = "eps_deg")]
+    pub eps_sine: f64,
 }
 
 impl Default for GaussMapAdaptiveParams {
@@ -121,7 +126,7 @@ impl Default for GaussMapAdaptiveParams {
             min_cluster_abs: 3,
             min_clusters: 2,
             max_clusters: 4,
-            eps_deg: 1e-6,
+            eps_sine: 1e-6,
         }
     }
 }
@@ -137,7 +142,7 @@ impl GaussMapAdaptiveParams {
             min_cluster_abs: self.min_cluster_abs,
             min_clusters: self.min_clusters,
             max_clusters: self.max_clusters,
-            eps_deg: self.eps_deg,
+            eps_sine: self.eps_sine,
         }
     }
 
@@ -155,12 +160,12 @@ impl GaussMapAdaptiveParams {
                 format!("must be in [2, k0 = {}], got {}", self.k0, self.k_min),
             ));
         }
-        check_range("sigma0", self.sigma0, 0.0, FRAC_PI_2)?;
-        check_range("sigma_max", self.sigma_max, 0.0, FRAC_PI_2)?;
+        check_range("sigma0_rad", self.sigma0, 0.0, FRAC_PI_2)?;
+        check_range("sigma_max_rad", self.sigma_max, 0.0, FRAC_PI_2)?;
         check_range("sigma_growth", self.sigma_growth, 1.0, 10.0)?;
         check_range("stop_share", self.stop_share, 0.0, 1.0)?;
         if !self.flat_tau.is_finite() {
-            return Err(bad_param("flat_tau", "must be finite"));
+            return Err(bad_param("flat_tau_rad", "must be finite"));
         }
         if self.max_inner > u16::MAX as usize - 1 {
             return Err(bad_param(
@@ -228,9 +233,89 @@ fn class_of(clusters: u32) -> FeatureClass {
     }
 }
 
+impl Describe for GaussMapAdaptive {
+    const NAME: &'static str = "gauss-map-adaptive";
+    const SOURCE: &'static str = "seed 002 §4";
+    const SUMMARY: &'static str =
+        "Gauss-map clustering, local-adaptive refinement (Weber 2011 ch. 3.6)";
+    type Params = GaussMapAdaptiveParams;
+    const PARAMS: &'static [ParamDoc] = &[
+        ParamDoc::new("k0", Unit::Count, "initial neighbourhood size (thesis 20)"),
+        ParamDoc::new(
+            "sigma0_rad",
+            Unit::Rad,
+            "initial clustering distance (thesis 0.1)",
+        ),
+        ParamDoc::new(
+            "sigma_growth",
+            Unit::None,
+            "factor on sigma per refinement step (thesis 1.1)",
+        ),
+        ParamDoc::new(
+            "k_step",
+            Unit::Count,
+            "decrement of k per refinement step (thesis 1)",
+        ),
+        ParamDoc::new(
+            "stop_share",
+            Unit::Fraction,
+            "refine while this share of the neighbours are candidates (thesis 0.30)",
+        ),
+        ParamDoc::new(
+            "sigma_max_rad",
+            Unit::Rad,
+            "refinement stops once sigma would exceed this (thesis 1.2)",
+        ),
+        ParamDoc::new("k_min", Unit::Count, "floor of k (thesis 8)"),
+        ParamDoc::new(
+            "kmin_is_break",
+            Unit::Flag,
+            "ASSUMPTION W-11: end the loop (true, default: thesis break condition) or clamp (false) at k_min",
+        ),
+        ParamDoc::new(
+            "max_inner",
+            Unit::Count,
+            "ASSUMPTION W-12: most refinement steps per candidate",
+        ),
+        ParamDoc::new(
+            "max_outer",
+            Unit::Count,
+            "ASSUMPTION W-12: most passes over the candidates",
+        ),
+        ParamDoc::new(
+            "isolated_rule",
+            Unit::Flag,
+            "ASSUMPTION W-13: drop candidates with at most one candidate neighbour",
+        ),
+        ParamDoc::new(
+            "isolated_sequential",
+            Unit::Flag,
+            "ASSUMPTION W-13: apply the isolated rule in index order with immediate effect (cascades along lines) instead of all at once",
+        ),
+        ParamDoc::new(
+            "recount_with_current_k",
+            Unit::Flag,
+            "ASSUMPTION W-10: count candidates in the current-k neighbourhood",
+        ),
+        FLAT_DOCS[0],
+        FLAT_DOCS[1],
+        FLAT_DOCS[2],
+        FLAT_DOCS[3],
+        FLAT_DOCS[4],
+        FLAT_DOCS[5],
+        FLAT_DOCS[6],
+        FLAT_DOCS[7],
+    ];
+
+    fn from_params(params: GaussMapAdaptiveParams) -> Result<Self, MethodError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
 impl FeatureDetector for GaussMapAdaptive {
     fn name(&self) -> &str {
-        "gauss-map-adaptive"
+        Self::NAME
     }
 
     fn detect(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<FeatureLabels, MethodError> {
@@ -358,9 +443,7 @@ impl FeatureDetector for GaussMapAdaptive {
                 break;
             }
         }
-        ctx.timer
-            .phases
-            .push(("refine".to_string(), t0.elapsed().as_secs_f64()));
+        ctx.record_phase("refine", t0.elapsed().as_secs_f64());
 
         // 3. ASSUMPTION W-13: isolated-outlier rule on the k0-neighbourhood (self
         // excluded). Default: evaluated on the candidate set left by the refinement, all

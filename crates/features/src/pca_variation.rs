@@ -19,7 +19,8 @@ use std::collections::VecDeque;
 use glam::DVec3;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{
-    Diagnostics, FeatureClass, FeatureDetector, FeatureLabels, MethodError, RunCtx,
+    Describe, Diagnostics, FeatureClass, FeatureDetector, FeatureLabels, MethodError, ParamDoc,
+    RunCtx, Unit,
 };
 use serde::{Deserialize, Serialize};
 
@@ -197,9 +198,64 @@ impl PcaVariation {
     }
 }
 
+impl Describe for PcaVariation {
+    const NAME: &'static str = "pca-variation";
+    const SOURCE: &'static str = "seed 002 §5.1";
+    const SUMMARY: &'static str =
+        "PCA surface variation, single or multi-scale (Pauly et al. 2003)";
+    type Params = PcaVariationParams;
+    const PARAMS: &'static [ParamDoc] = &[
+        ParamDoc::new(
+            "mode",
+            Unit::Choice,
+            "single or multi (multi-scale with hysteresis, the thesis's comparison)",
+        ),
+        ParamDoc::new(
+            "k",
+            Unit::Count,
+            "single-mode neighbourhood size incl. the point (ASSUMPTION W-17: 16)",
+        ),
+        ParamDoc::new(
+            "threshold",
+            Unit::None,
+            "surface-variation threshold sigma_max (thesis 0.08)",
+        ),
+        ParamDoc::new(
+            "n_min",
+            Unit::Count,
+            "smallest multi-mode neighbourhood (thesis 10)",
+        ),
+        ParamDoc::new(
+            "n_max",
+            Unit::Count,
+            "largest multi-mode neighbourhood (thesis 40)",
+        ),
+        ParamDoc::new(
+            "omega_lo",
+            Unit::Count,
+            "lower hysteresis bound on the feature weight (thesis 25)",
+        ),
+        ParamDoc::new(
+            "omega_hi",
+            Unit::Count,
+            "upper hysteresis bound, seeds (thesis 30)",
+        ),
+        ParamDoc::new(
+            "hysteresis",
+            Unit::Flag,
+            "ASSUMPTION W-16: grow from seeds (true) or label omega >= omega_hi only",
+        ),
+    ];
+
+    fn from_params(params: PcaVariationParams) -> Result<Self, MethodError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
 impl FeatureDetector for PcaVariation {
     fn name(&self) -> &str {
-        "pca-variation"
+        Self::NAME
     }
 
     fn detect(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<FeatureLabels, MethodError> {

@@ -263,7 +263,7 @@ fn phases_and_diagnostics_are_reported() {
     let mut ctx = RunCtx::new(1);
     let out = GaussMap::default().detect(&cloud, &mut ctx).unwrap();
     for ph in ["knn", "gauss-map"] {
-        assert!(ctx.timer.phases.iter().any(|(n, _)| n == ph), "{ph}");
+        assert!(ctx.phases().iter().any(|(n, _)| n == ph), "{ph}");
     }
     for key in ["candidates", "features", "corners", "edges", "flat"] {
         assert!(out.diagnostics.contains_key(key), "{key}");
@@ -280,7 +280,7 @@ fn phases_and_diagnostics_are_reported() {
     ] {
         assert!(out.diagnostics.contains_key(key), "{key}");
     }
-    assert!(ctx.timer.phases.iter().any(|(n, _)| n == "refine"));
+    assert!(ctx.phases().iter().any(|(n, _)| n == "refine"));
 }
 
 #[test]

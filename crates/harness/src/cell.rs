@@ -247,6 +247,12 @@ pub fn default_metrics(kind: MethodKind) -> &'static [&'static str] {
             "normal_pgp10",
         ],
         MethodKind::Features => &["feature_f1", "feature_precision", "feature_recall"],
+        MethodKind::Filter => &[
+            "cloud_rms_dist",
+            "cloud_mean_dist",
+            "points_out",
+            "outliers_removed",
+        ],
         MethodKind::Reconstruct => &["chamfer_l1", "hausdorff", "fscore_0.01", "topology_ok"],
     }
 }
@@ -320,8 +326,10 @@ pub struct Outcome {
     pub phases: Vec<(String, f64)>,
     /// Data generation time.
     pub generate_s: f64,
-    /// Method time.
+    /// Method time (the last step of a pipeline).
     pub method_s: f64,
+    /// Wall time of every step of a pipeline, in order (empty for a single method).
+    pub steps: Vec<(String, f64)>,
     /// Metric time.
     pub metrics_s: f64,
     /// Mesh and per-vertex error, for reconstructions.
@@ -378,9 +386,17 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
         reconbench_synth::from_spec(&spec.data.shape).map_err(|e| format!("shape: {e}"))?,
     );
     let t = Instant::now();
-    let data =
+    let mut data =
         generate(&spec.data, shape.clone(), cell.data_seed).map_err(|e| format!("data: {e}"))?;
     let generate_s = t.elapsed().as_secs_f64();
+    let method_seed = derive_seed(&[cell.data_seed, fnv1a64(spec.method.as_bytes())]);
+    let mut ctx = RunCtx::new(method_seed)
+        .with_budget(budget)
+        .with_progress(crate::worker::progress_sink());
+    let (mut steps, oriented) =
+        crate::pipeline::run_pre_steps(&spec.pre, &mut data, shape.as_ref(), cell.data_seed, &ctx)?;
+    crate::pipeline::check_input_needs(entry, data.input.normals().is_some(), oriented)
+        .map_err(|m| format!("method: {m}"))?;
     let gt = Arc::new(data.gt.clone());
     let env = MethodEnv {
         ground_truth: Some(gt.clone()),
@@ -389,8 +405,6 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
         .build(&spec.params, &env)
         .map_err(|e| format!("method: {e}"))?;
     let opts = metric_options(&spec.metrics).map_err(|e| e.to_string())?;
-    let method_seed = derive_seed(&[cell.data_seed, fnv1a64(spec.method.as_bytes())]);
-    let mut ctx = RunCtx::new(method_seed).with_budget(budget);
     let reference = Reference::analytic(shape.as_ref());
     let diag = shape.aabb().diagonal();
     let mut out = Outcome {
@@ -400,10 +414,36 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
         phases: Vec::new(),
         generate_s,
         method_s: 0.0,
+        steps: Vec::new(),
         metrics_s: 0.0,
         render: None,
     };
     match built {
+        Built::Filter(m) => {
+            let t = Instant::now();
+            let n_in = data.input.len();
+            let r = m
+                .filter(&data.input, &mut ctx)
+                .map_err(|e| format!("method: {e}"))?;
+            out.method_s = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            out.diagnostics = diagnostics_json(&r.diagnostics);
+            let outliers_in = data.is_outlier.iter().filter(|&&o| o).count();
+            crate::pipeline::replace_cloud(&mut data, r, n_in, shape.as_ref())
+                .map_err(|e| format!("method: {e}"))?;
+            let outliers_out = data.is_outlier.iter().filter(|&&o| o).count();
+            let d: Vec<f64> = data
+                .input
+                .positions()
+                .iter()
+                .zip(&data.is_outlier)
+                .filter(|(_, o)| !**o)
+                .map(|(&p, _)| shape.distance(p) / diag)
+                .collect();
+            out.metrics = filter_metrics(n_in, data.input.len(), outliers_in, outliers_out, &d);
+            out.dist = Dist::of("point distance (diag)", &d);
+            out.metrics_s = t.elapsed().as_secs_f64();
+        }
         Built::Normals(m) => {
             let t = Instant::now();
             let r = m
@@ -499,6 +539,45 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             });
         }
     }
-    out.phases = ctx.timer.phases.clone();
+    out.phases = ctx.phases();
+    if !spec.pre.is_empty() {
+        steps.push((spec.method.clone(), out.method_s));
+        out.steps = steps;
+    }
     Ok(out)
+}
+
+/// Metrics of a filter's output cloud: distances of its non-outlier points to the
+/// surface (fractions of the diagonal), point counts and the share of the generator's
+/// outliers it removed.
+fn filter_metrics(
+    n_in: usize,
+    n_out: usize,
+    outliers_in: usize,
+    outliers_out: usize,
+    d: &[f64],
+) -> BTreeMap<String, f64> {
+    let mut m = BTreeMap::new();
+    m.insert("points_in".into(), n_in as f64);
+    m.insert("points_out".into(), n_out as f64);
+    if !d.is_empty() {
+        let n = d.len() as f64;
+        m.insert("cloud_mean_dist".into(), d.iter().sum::<f64>() / n);
+        m.insert(
+            "cloud_rms_dist".into(),
+            (d.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
+        );
+        m.insert(
+            "cloud_max_dist".into(),
+            d.iter().fold(0.0, |a, &b| a.max(b)),
+        );
+    }
+    if outliers_in > 0 {
+        let removed = outliers_in.saturating_sub(outliers_out);
+        m.insert(
+            "outliers_removed".into(),
+            removed as f64 / outliers_in as f64,
+        );
+    }
+    keep_metrics(m)
 }

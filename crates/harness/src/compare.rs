@@ -211,6 +211,10 @@ pub struct Comparison {
     pub lost: Vec<String>,
     /// Configurations only in the current run.
     pub new: Vec<String>,
+    /// Configurations whose key changed (a parameter renamed, a default added) but whose
+    /// label matched exactly one configuration on each side; they were compared.
+    #[serde(default)]
+    pub rekeyed: Vec<String>,
     /// Metric values compared.
     pub compared: usize,
 }
@@ -220,6 +224,14 @@ impl Comparison {
     pub fn has_regressions(&self) -> bool {
         !self.regressed.is_empty() || !self.lost.is_empty()
     }
+}
+
+fn label_counts(side: &[BaselineEntry]) -> BTreeMap<&str, usize> {
+    let mut n: BTreeMap<&str, usize> = BTreeMap::new();
+    for c in side {
+        *n.entry(c.label.as_str()).or_default() += 1;
+    }
+    n
 }
 
 /// Compares `current` against `baseline`.
@@ -234,11 +246,33 @@ pub fn compare(baseline: &Baseline, current: &Baseline, tols: &Tolerances) -> Co
         .iter()
         .map(|c| (c.config.as_str(), c))
         .collect();
+    // Labels that name exactly one configuration on each side, for re-keyed matches.
+    let (bn, cn) = (
+        label_counts(&baseline.configs),
+        label_counts(&current.configs),
+    );
+    let by_label: BTreeMap<&str, &BaselineEntry> = current
+        .configs
+        .iter()
+        .filter(|c| !base.contains_key(c.config.as_str()) && cn[c.label.as_str()] == 1)
+        .map(|c| (c.label.as_str(), c))
+        .collect();
+    let mut matched_by_label = std::collections::BTreeSet::new();
     let mut out = Comparison::default();
     for b in &baseline.configs {
-        let Some(c) = cur.get(b.config.as_str()) else {
-            out.lost.push(format!("{} (missing)", b.label));
-            continue;
+        let c = match cur.get(b.config.as_str()) {
+            Some(c) => *c,
+            None => match by_label.get(b.label.as_str()) {
+                Some(c) if bn[b.label.as_str()] == 1 => {
+                    out.rekeyed.push(b.label.clone());
+                    matched_by_label.insert(c.config.as_str());
+                    *c
+                }
+                _ => {
+                    out.lost.push(format!("{} (missing)", b.label));
+                    continue;
+                }
+            },
         };
         if c.ok < b.ok {
             out.lost.push(format!(
@@ -276,7 +310,7 @@ pub fn compare(baseline: &Baseline, current: &Baseline, tols: &Tolerances) -> Co
         }
     }
     for c in &current.configs {
-        if !base.contains_key(c.config.as_str()) {
+        if !base.contains_key(c.config.as_str()) && !matched_by_label.contains(c.config.as_str()) {
             out.new.push(c.label.clone());
         }
     }
@@ -286,6 +320,25 @@ pub fn compare(baseline: &Baseline, current: &Baseline, tols: &Tolerances) -> Co
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_rekeyed_configuration_is_matched_by_its_unique_label() {
+        let base = bl(1.0, 3);
+        let mut cur = bl(2.0, 3);
+        cur.configs[0].config = "c2".into();
+        let c = compare(&base, &cur, &Tolerances::default());
+        assert_eq!(c.rekeyed, ["d / p / m"]);
+        assert!(c.lost.is_empty() && c.new.is_empty(), "{c:?}");
+        assert_eq!(c.compared, 1);
+        // Two current configurations with that label: no guess, lost and new.
+        let mut two = cur.clone();
+        let mut other = two.configs[0].clone();
+        other.config = "c3".into();
+        two.configs.push(other);
+        let c = compare(&base, &two, &Tolerances::default());
+        assert!(c.rekeyed.is_empty());
+        assert_eq!((c.lost.len(), c.new.len()), (1, 2));
+    }
 
     fn bl(v: f64, ok: usize) -> Baseline {
         Baseline {

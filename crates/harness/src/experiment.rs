@@ -34,7 +34,8 @@ use serde_json::{Map, Value};
 use crate::cell;
 use crate::error::{HarnessError, Result};
 use crate::key::{derive_seed, hash_value, hex_key};
-use crate::registry::{self, MethodKind};
+use crate::pipeline::{self, StepSpec};
+use crate::registry::{self, MethodEntry, MethodKind};
 
 /// Seed indices: a count (`3` = 0, 1, 2) or an explicit list.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -82,12 +83,49 @@ fn default_sampler() -> String {
     "uniform".into()
 }
 
-/// One `[[methods]]` entry.
+/// One step of a `steps = [...]` pipeline: a registry name, or a table with the name
+/// and the step's parameters (`{ name = "jet", params = { k = 18 } }`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum StepEntry {
+    /// Just the name (default parameters).
+    Name(String),
+    /// Name and parameters.
+    Table {
+        /// Registry name.
+        name: String,
+        /// Parameters; list values expand like the entry's own.
+        #[serde(default)]
+        params: toml::Table,
+    },
+}
+
+impl StepEntry {
+    fn name(&self) -> &str {
+        match self {
+            StepEntry::Name(n) | StepEntry::Table { name: n, .. } => n,
+        }
+    }
+
+    fn params(&self) -> toml::Table {
+        match self {
+            StepEntry::Name(_) => toml::Table::new(),
+            StepEntry::Table { params, .. } => params.clone(),
+        }
+    }
+}
+
+/// One `[[methods]]` entry: a single method (`name`) or a pipeline (`steps`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MethodSpec {
-    /// Registry name.
-    pub name: String,
+    /// Registry name (a single method; leave out with `steps`).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// A pipeline: steps run in order, each seeing the cloud the previous ones left
+    /// (normals and labels attached, filters applied). `params` belong to the last step.
+    #[serde(default)]
+    pub steps: Vec<StepEntry>,
     /// Label in tables (default: the name, plus the swept parameters).
     #[serde(default)]
     pub label: Option<String>,
@@ -221,12 +259,16 @@ pub struct DataSpec {
 pub struct CellSpec {
     /// The input data.
     pub data: DataSpec,
-    /// Method registry name.
+    /// Method registry name (the last step of a pipeline).
     pub method: String,
-    /// Method kind.
+    /// Method kind (of the last step).
     pub kind: MethodKind,
-    /// Resolved parameters (defaults filled in).
+    /// Resolved parameters (defaults filled in) of the last step.
     pub params: Value,
+    /// The steps of a pipeline before the last, in order (empty for a single method,
+    /// and then left out of the key so single-method keys are unchanged).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pre: Vec<StepSpec>,
     /// Experiment seed.
     pub experiment_seed: u64,
     /// Seed index (repetition).
@@ -515,25 +557,9 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
     // Methods x params.
     let mut methods = Vec::new();
     for (i, m) in file.methods.iter().enumerate() {
-        let entry = registry::find(&m.name)
-            .map_err(|e| HarnessError::input(format!("methods[{i}]: {e}")))?;
-        let (combos, swept) = expand_table(&to_json(&m.params));
-        for c in combos {
-            let resolved = entry
-                .resolve_params(&Value::Object(c.clone()))
-                .map_err(|e| HarnessError::input(format!("methods[{i}]: {e}")))?;
-            let base = m.label.clone().unwrap_or_else(|| m.name.clone());
-            let suffix: Vec<String> = swept
-                .iter()
-                .map(|k| format!("{k}={}", fmt_value(&c[k])))
-                .collect();
-            let label = if suffix.is_empty() {
-                base
-            } else {
-                format!("{base} {}", suffix.join(" "))
-            };
-            methods.push((label, entry, resolved));
-        }
+        methods.extend(
+            expand_method(m).map_err(|e| HarnessError::input(format!("methods[{i}]: {e}")))?,
+        );
     }
 
     let salt = key_salt();
@@ -547,13 +573,14 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
                 perturb: perturb.clone(),
             };
             let data_hash = hash_value(&salt, &serde_json::to_value(&data).unwrap_or(Value::Null));
-            for (mlabel, entry, params) in &methods {
+            for (mlabel, entry, params, pre) in &methods {
                 for &s in &seeds {
                     let spec = CellSpec {
                         data: data.clone(),
                         method: entry.name.to_string(),
                         kind: entry.kind,
                         params: params.clone(),
+                        pre: pre.clone(),
                         experiment_seed: file.seed,
                         seed_index: s,
                         metrics: metrics.clone(),
@@ -591,6 +618,109 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
         }
     }
     Ok((cells, swept_all))
+}
+
+/// One expanded method configuration: label, last step, its parameters, earlier steps.
+type MethodConfig = (String, &'static MethodEntry, Value, Vec<StepSpec>);
+
+/// Expands one `[[methods]]` entry over its list-valued parameters. A pipeline's steps
+/// expand too; their swept parameters are labelled `step.param`.
+fn expand_method(m: &MethodSpec) -> Result<Vec<MethodConfig>> {
+    let steps: Vec<StepEntry> = match (&m.name, m.steps.is_empty()) {
+        (Some(n), true) => vec![StepEntry::Name(n.clone())],
+        (None, false) => m.steps.clone(),
+        (Some(_), false) => {
+            return Err(HarnessError::input(
+                "give either 'name' (one method) or 'steps' (a pipeline), not both",
+            ));
+        }
+        (None, true) => {
+            return Err(HarnessError::input(
+                "missing 'name' (one method) or 'steps' (a pipeline)",
+            ));
+        }
+    };
+    let entries: Vec<&'static MethodEntry> = steps
+        .iter()
+        .enumerate()
+        .map(|(j, st)| {
+            registry::find(st.name()).map_err(|e| {
+                if steps.len() > 1 {
+                    HarnessError::input(format!("step {}: {e}", j + 1))
+                } else {
+                    e
+                }
+            })
+        })
+        .collect::<Result<_>>()?;
+    pipeline::validate_chain(&entries, false)?;
+    // One table over all steps' parameters: keys `j:name` (step j), the last step's
+    // own `params` at the end.
+    let last = steps.len() - 1;
+    let mut table = Map::new();
+    for (j, st) in steps.iter().enumerate() {
+        let mut p = to_json(&st.params());
+        if j == last {
+            p.extend(to_json(&m.params));
+        }
+        for (k, v) in p {
+            table.insert(format!("{j}:{k}"), v);
+        }
+    }
+    let (combos, swept) = expand_table(&table);
+    let default_label = steps
+        .iter()
+        .map(|s| s.name())
+        .collect::<Vec<_>>()
+        .join(" -> ");
+    let mut out = Vec::new();
+    for c in combos {
+        let mut resolved = Vec::with_capacity(steps.len());
+        for (j, e) in entries.iter().enumerate() {
+            let prefix = format!("{j}:");
+            let own: Map<String, Value> = c
+                .iter()
+                .filter_map(|(k, v)| k.strip_prefix(&prefix).map(|k| (k.to_string(), v.clone())))
+                .collect();
+            let r = e.resolve_params(&Value::Object(own)).map_err(|err| {
+                if steps.len() > 1 {
+                    HarnessError::input(format!("step {} {err}", j + 1))
+                } else {
+                    err
+                }
+            })?;
+            resolved.push(r);
+        }
+        let base = m.label.clone().unwrap_or_else(|| default_label.clone());
+        let suffix: Vec<String> = swept
+            .iter()
+            .map(|k| {
+                let (j, name) = k.split_once(':').unwrap_or(("0", k));
+                let shown = match j.parse::<usize>() {
+                    Ok(j) if j != last => format!("{}.{name}", steps[j].name()),
+                    _ => name.to_string(),
+                };
+                format!("{shown}={}", fmt_value(&c[k]))
+            })
+            .collect();
+        let label = if suffix.is_empty() {
+            base
+        } else {
+            format!("{base} {}", suffix.join(" "))
+        };
+        let params = resolved.pop().unwrap_or(Value::Null);
+        let pre = entries[..last]
+            .iter()
+            .zip(resolved)
+            .map(|(e, params)| StepSpec {
+                method: e.name.to_string(),
+                kind: e.kind,
+                params,
+            })
+            .collect();
+        out.push((label, entries[last], params, pre));
+    }
+    Ok(out)
 }
 
 /// Parses a `--shard i/N` (0-based `i < N`).

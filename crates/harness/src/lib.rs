@@ -15,6 +15,7 @@ pub mod experiment;
 pub mod key;
 pub mod methods;
 pub mod oneshot;
+pub mod pipeline;
 pub mod plots;
 pub mod provenance;
 pub mod registry;

@@ -15,7 +15,7 @@ use crate::error::{HarnessError, Result};
 use crate::registry::{self, Built, MethodEnv, MethodKind};
 
 /// Name of the label channel `features` writes (the metrics crate reads it).
-pub const FEATURE_CHANNEL: &str = "feature";
+pub use reconbench_geom::method::FEATURE_CHANNEL;
 /// Name of the score channel `features` writes when the method gives scores.
 pub const SCORE_CHANNEL: &str = "feature_score";
 
@@ -67,7 +67,10 @@ pub fn run(
     let params = entry.resolve_params(overrides)?;
     let cloud =
         reconbench_geom::io::read_cloud(input).map_err(|e| HarnessError::input(e.to_string()))?;
-    // The method sees positions only (plus what oracles are documented to read).
+    crate::pipeline::check_input_needs(entry, cloud.normals().is_some(), None)
+        .map_err(|e| HarnessError::input(format!("{}: {e}", input.display())))?;
+    // The method sees the file's positions and normals (plus what oracles are documented
+    // to read).
     let built = entry
         .build(&params, &MethodEnv::default())
         .map_err(|e| HarnessError::input(format!("{name}: {e}")))?;
@@ -98,6 +101,13 @@ pub fn run(
                 .with_normals(r.normals)
                 .map_err(|e| HarnessError::failure(format!("{name}: {e}")))?;
             reconbench_geom::io::write_cloud(output, &out)
+                .map_err(|e| HarnessError::failure(e.to_string()))?;
+            r.diagnostics
+        }
+        Built::Filter(m) => {
+            let r = m.filter(&cloud, &mut ctx).map_err(method_err)?;
+            summary.insert("points_out".into(), r.cloud.len() as f64);
+            reconbench_geom::io::write_cloud(output, &r.cloud)
                 .map_err(|e| HarnessError::failure(e.to_string()))?;
             r.diagnostics
         }
@@ -134,7 +144,7 @@ pub fn run(
         points: cloud.len(),
         summary,
         seconds,
-        phases: ctx.timer.phases.clone(),
+        phases: ctx.phases(),
         diagnostics: crate::cell::diagnostics_json(&diagnostics),
     })
 }

@@ -1,22 +1,28 @@
-//! The method registry: every normal estimator, feature detector and reconstructor by a
-//! stable kebab-case name, with typed parameters (serde defaults, documented units).
+//! The method registry: every normal estimator, feature detector, filter and
+//! reconstructor by a stable kebab-case name, with typed parameters (serde defaults,
+//! documented units).
 //!
-//! Adding a method is one entry in [`entries`]: a name, the seed section it implements,
-//! a summary, its parameter docs and a constructor from its typed `Params`:
+//! A method describes itself once, beside its code, by implementing
+//! [`reconbench_geom::method::Describe`] (name, source, summary, parameter docs with
+//! units, input needs, validating constructor); its registry entry is then one line in
+//! [`crate::methods::algorithms`]:
 //!
 //! ```ignore
-//! normals::<PcaParams>("pca", "seed 002 §3.1", "PCA plane fit", PCA_DOCS,
-//!     |p, _env| Ok(Box::new(Pca::new(p)))),
+//! reconstruct::<BallPivoting>(),
 //! ```
 //!
 //! `Params` types derive `Deserialize` with `#[serde(default, deny_unknown_fields)]` and
 //! `Default`, so unknown keys are errors listing the valid ones and `list` can show the
-//! defaults.
+//! defaults. The oracles and test-only methods, which need the cell's ground truth or
+//! misbehave on purpose, use [`custom`] instead.
 
 use std::sync::{Arc, OnceLock};
 
 use glam::DVec3;
-use reconbench_geom::method::{FeatureDetector, MethodError, NormalEstimator, Reconstructor};
+use reconbench_geom::method::{
+    Describe, FeatureDetector, Filter, MethodError, NormalEstimator, Reconstructor,
+};
+pub use reconbench_geom::method::{Needs, ParamDoc, Unit};
 use reconbench_synth::Shape;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -32,6 +38,8 @@ pub enum MethodKind {
     Normals,
     /// A [`FeatureDetector`].
     Features,
+    /// A [`Filter`] (cloud in, cloud out).
+    Filter,
     /// A [`Reconstructor`].
     Reconstruct,
 }
@@ -42,6 +50,7 @@ impl MethodKind {
         match self {
             MethodKind::Normals => "normals",
             MethodKind::Features => "features",
+            MethodKind::Filter => "filter",
             MethodKind::Reconstruct => "reconstruct",
         }
     }
@@ -51,18 +60,6 @@ impl std::fmt::Display for MethodKind {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.as_str())
     }
-}
-
-/// Documentation of one parameter (its default comes from the `Params` type).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct ParamDoc {
-    /// Name as written in experiment files and `--set`.
-    pub name: &'static str,
-    /// Unit: `"diag"` (fraction of the bounding-box diagonal), `"spacing"`, `"deg"`,
-    /// `"s"`, `"count"`, `"MiB"`, `""` for dimensionless.
-    pub unit: &'static str,
-    /// One sentence.
-    pub doc: &'static str,
 }
 
 /// Ground truth a cell can hand to oracle methods.
@@ -96,19 +93,19 @@ pub enum Built {
     Normals(Box<dyn NormalEstimator>),
     /// A feature detector.
     Features(Box<dyn FeatureDetector>),
+    /// A filter.
+    Filter(Box<dyn Filter>),
     /// A reconstructor.
     Reconstruct(Box<dyn Reconstructor>),
 }
 
-/// Constructor of a normal estimator from its typed parameters.
-pub type MakeNormals<P> = fn(P, &MethodEnv) -> Result<Box<dyn NormalEstimator>, MethodError>;
-/// Constructor of a feature detector from its typed parameters.
-pub type MakeFeatures<P> = fn(P, &MethodEnv) -> Result<Box<dyn FeatureDetector>, MethodError>;
-/// Constructor of a reconstructor from its typed parameters.
-pub type MakeReconstruct<P> = fn(P, &MethodEnv) -> Result<Box<dyn Reconstructor>, MethodError>;
+/// Constructor of a [`custom`] entry from its typed parameters and the cell's
+/// environment.
+pub type MakeCustom<P> = fn(P, &MethodEnv) -> Result<Built, MethodError>;
 
 type BuildFn = Arc<dyn Fn(&Value, &MethodEnv) -> Result<Built, MethodError> + Send + Sync>;
 type DefaultsFn = Arc<dyn Fn() -> Value + Send + Sync>;
+type CanonFn = Arc<dyn Fn(&Value) -> Result<Value, MethodError> + Send + Sync>;
 
 /// One registered method.
 #[derive(Clone)]
@@ -123,11 +120,14 @@ pub struct MethodEntry {
     pub summary: &'static str,
     /// Parameter docs.
     pub params: &'static [ParamDoc],
+    /// What its input cloud must carry.
+    pub needs: Needs,
     /// Whether it receives ground truth (oracles only).
     pub needs_ground_truth: bool,
     /// Hidden from `list` unless `--all` (test-only `debug-*` methods).
     pub hidden: bool,
     defaults: DefaultsFn,
+    canon: CanonFn,
     build: BuildFn,
 }
 
@@ -147,17 +147,13 @@ impl MethodEntry {
         (self.defaults)()
     }
 
-    /// Defaults overlaid with `params` (a JSON object; `null` means none), checked by
-    /// parsing into the typed `Params`. The result is what goes into cell keys.
+    /// `params` (a JSON object; `null` means none) parsed into the typed `Params`
+    /// (defaults filled in, old parameter names accepted) and written back under the
+    /// canonical names. The result is what goes into cell keys.
     pub fn resolve_params(&self, params: &Value) -> Result<Value> {
-        let mut out = self.defaults();
-        match (params, &mut out) {
-            (Value::Null, _) => {}
-            (Value::Object(p), Value::Object(o)) => {
-                for (k, v) in p {
-                    o.insert(k.clone(), v.clone());
-                }
-            }
+        let defaults = self.defaults();
+        match (params, &defaults) {
+            (Value::Null, _) | (Value::Object(_), Value::Object(_)) => {}
             (Value::Object(p), _) => {
                 if let Some(k) = p.keys().next() {
                     return Err(HarnessError::input(format!(
@@ -173,6 +169,8 @@ impl MethodEntry {
                 )));
             }
         }
+        let out = (self.canon)(params)
+            .map_err(|e| HarnessError::input(format!("method '{}': {e}", self.name)))?;
         // Validate by building once without ground truth when the method allows it; the
         // parse step alone is what matters (oracles fail later without ground truth).
         (self.build)(&out, &MethodEnv::default())
@@ -214,75 +212,74 @@ fn defaults_of<P: Serialize + Default>() -> DefaultsFn {
     Arc::new(|| serde_json::to_value(P::default()).unwrap_or(Value::Null))
 }
 
-/// An entry for a normal estimator.
-pub fn normals<P>(
-    name: &'static str,
-    seed: &'static str,
-    summary: &'static str,
-    params: &'static [ParamDoc],
-    make: MakeNormals<P>,
-) -> MethodEntry
-where
-    P: DeserializeOwned + Serialize + Default + 'static,
-{
+fn canon_of<P: Serialize + DeserializeOwned + 'static>() -> CanonFn {
+    Arc::new(|v| {
+        let p: P = parse_params(v)?;
+        serde_json::to_value(p).map_err(|e| MethodError::Failed(format!("parameters: {e}")))
+    })
+}
+
+fn described<M: Describe + 'static>(kind: MethodKind, wrap: fn(M) -> Built) -> MethodEntry {
     MethodEntry {
-        name,
-        kind: MethodKind::Normals,
-        seed,
-        summary,
-        params,
+        name: M::NAME,
+        kind,
+        seed: M::SOURCE,
+        summary: M::SUMMARY,
+        params: M::PARAMS,
+        needs: M::NEEDS,
         needs_ground_truth: false,
         hidden: false,
-        defaults: defaults_of::<P>(),
-        build: Arc::new(move |v, env| Ok(Built::Normals(make(parse_params(v)?, env)?))),
+        defaults: defaults_of::<M::Params>(),
+        canon: canon_of::<M::Params>(),
+        build: Arc::new(move |v, _env| Ok(wrap(M::from_params(parse_params(v)?)?))),
     }
 }
 
-/// An entry for a feature detector.
-pub fn features<P>(
-    name: &'static str,
-    seed: &'static str,
-    summary: &'static str,
-    params: &'static [ParamDoc],
-    make: MakeFeatures<P>,
-) -> MethodEntry
-where
-    P: DeserializeOwned + Serialize + Default + 'static,
-{
-    MethodEntry {
-        name,
-        kind: MethodKind::Features,
-        seed,
-        summary,
-        params,
-        needs_ground_truth: false,
-        hidden: false,
-        defaults: defaults_of::<P>(),
-        build: Arc::new(move |v, env| Ok(Built::Features(make(parse_params(v)?, env)?))),
-    }
+/// The entry of a normal estimator.
+pub fn normals<M: Describe + NormalEstimator + 'static>() -> MethodEntry {
+    described::<M>(MethodKind::Normals, |m| Built::Normals(Box::new(m)))
 }
 
-/// An entry for a reconstructor.
-pub fn reconstruct<P>(
+/// The entry of a feature detector.
+pub fn features<M: Describe + FeatureDetector + 'static>() -> MethodEntry {
+    described::<M>(MethodKind::Features, |m| Built::Features(Box::new(m)))
+}
+
+/// The entry of a filter.
+pub fn filter<M: Describe + Filter + 'static>() -> MethodEntry {
+    described::<M>(MethodKind::Filter, |m| Built::Filter(Box::new(m)))
+}
+
+/// The entry of a reconstructor.
+pub fn reconstruct<M: Describe + Reconstructor + 'static>() -> MethodEntry {
+    described::<M>(MethodKind::Reconstruct, |m| Built::Reconstruct(Box::new(m)))
+}
+
+/// An entry whose constructor also sees the cell's environment (oracles, test-only
+/// methods). `make` must return a method of `kind`.
+pub fn custom<P>(
+    kind: MethodKind,
     name: &'static str,
     seed: &'static str,
     summary: &'static str,
     params: &'static [ParamDoc],
-    make: MakeReconstruct<P>,
+    make: MakeCustom<P>,
 ) -> MethodEntry
 where
     P: DeserializeOwned + Serialize + Default + 'static,
 {
     MethodEntry {
         name,
-        kind: MethodKind::Reconstruct,
+        kind,
         seed,
         summary,
         params,
+        needs: Needs::Positions,
         needs_ground_truth: false,
         hidden: false,
         defaults: defaults_of::<P>(),
-        build: Arc::new(move |v, env| Ok(Built::Reconstruct(make(parse_params(v)?, env)?))),
+        canon: canon_of::<P>(),
+        build: Arc::new(move |v, env| make(parse_params(v)?, env)),
     }
 }
 
@@ -291,6 +288,13 @@ impl MethodEntry {
     #[must_use]
     pub fn oracle(mut self) -> Self {
         self.needs_ground_truth = true;
+        self
+    }
+
+    /// Declares what the input must carry (for [`custom`] entries).
+    #[must_use]
+    pub fn needing(mut self, needs: Needs) -> Self {
+        self.needs = needs;
         self
     }
 
@@ -316,6 +320,7 @@ fn entries() -> Vec<MethodEntry> {
         debug::hang(),
         debug::alloc(),
         debug::sleep(),
+        debug::splats(),
     ];
     // Algorithm crates: one line each in methods/algorithms.rs.
     v.extend(crate::methods::algorithms::entries());
@@ -369,6 +374,8 @@ pub struct MethodInfo {
     pub summary: String,
     /// Oracle (receives ground truth)?
     pub oracle: bool,
+    /// What its input must carry.
+    pub needs: Needs,
     /// Parameters with defaults.
     pub params: Vec<ParamInfo>,
 }
@@ -386,13 +393,14 @@ pub fn list(all: bool) -> Vec<MethodInfo> {
                 seed: e.seed.to_string(),
                 summary: e.summary.to_string(),
                 oracle: e.needs_ground_truth,
+                needs: e.needs,
                 params: e
                     .params
                     .iter()
                     .map(|p| ParamInfo {
                         name: p.name.to_string(),
                         default: defaults.get(p.name).cloned().unwrap_or(Value::Null),
-                        unit: p.unit.to_string(),
+                        unit: p.unit.as_str().to_string(),
                         doc: p.doc.to_string(),
                     })
                     .collect(),
@@ -462,6 +470,79 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn every_entry_agrees_with_the_method_it_builds() {
+        for e in registry() {
+            let built = e
+                .build(&e.defaults(), &MethodEnv::default())
+                .unwrap_or_else(|err| panic!("{}: defaults do not build: {err}", e.name));
+            let (kind, name) = match &built {
+                Built::Normals(m) => (MethodKind::Normals, m.name().to_string()),
+                Built::Features(m) => (MethodKind::Features, m.name().to_string()),
+                Built::Filter(m) => (MethodKind::Filter, m.name().to_string()),
+                Built::Reconstruct(m) => (MethodKind::Reconstruct, m.name().to_string()),
+            };
+            assert_eq!(kind, e.kind, "{}", e.name);
+            assert_eq!(
+                name, e.name,
+                "registered name differs from the method's own"
+            );
+            assert!(!e.summary.is_empty() && !e.seed.is_empty(), "{}", e.name);
+            for p in e.params {
+                assert!(!p.doc.is_empty(), "{}.{}: empty doc", e.name, p.name);
+            }
+        }
+    }
+
+    #[test]
+    fn angle_parameters_name_their_unit() {
+        for e in registry() {
+            for p in e.params {
+                let named = if p.name.ends_with("_deg") {
+                    Some(Unit::Deg)
+                } else if p.name.ends_with("_rad") {
+                    Some(Unit::Rad)
+                } else {
+                    None
+                };
+                if p.unit.is_angle() || named.is_some() {
+                    assert_eq!(
+                        named,
+                        Some(p.unit),
+                        "{}.{}: unit {:?}",
+                        e.name,
+                        p.name,
+                        p.unit
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_parameters_fail_when_resolved() {
+        for (name, key, bad) in [
+            ("pf", "k", json!(1)),
+            ("jet", "k", json!(2)),
+            ("lvm-approx", "k", json!(65)),
+            ("gauss-map", "sigma_rad", json!(-1.0)),
+            ("priority-front", "threads", json!(0)),
+        ] {
+            let err = find(name)
+                .unwrap()
+                .resolve_params(&json!({ key: bad }))
+                .unwrap_err()
+                .to_string();
+            assert!(err.contains(key), "{name}: {err}");
+        }
+        // Old angle names stay readable.
+        let v = find("ufm")
+            .unwrap()
+            .resolve_params(&json!({"max_fold": 90}))
+            .unwrap();
+        assert_eq!(v["max_fold_deg"], json!(90.0));
     }
 
     #[test]

@@ -182,6 +182,7 @@ fn kind_title(k: MethodKind) -> &'static str {
     match k {
         MethodKind::Normals => "Normal estimation",
         MethodKind::Features => "Sharp features",
+        MethodKind::Filter => "Filters (cloud in, cloud out)",
         MethodKind::Reconstruct => "Reconstruction",
     }
 }

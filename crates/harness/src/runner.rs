@@ -17,8 +17,8 @@ use std::ffi::OsString;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitStatus, Stdio};
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
@@ -28,7 +28,7 @@ use crate::experiment::{Cell, Experiment, shard_cells};
 use crate::provenance::{Provenance, rss_mib};
 use crate::registry::MethodKind;
 use crate::store::{Row, Status, Store, dedupe_sorted, read_rows, write_rows};
-use crate::worker::{PANIC_PREFIX, REPLY_PREFIX, RenderRequest, Reply, Request};
+use crate::worker::{PANIC_PREFIX, PROGRESS_PREFIX, REPLY_PREFIX, RenderRequest, Reply, Request};
 
 /// How to run an experiment.
 #[derive(Debug, Clone)]
@@ -194,6 +194,7 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let ok = AtomicUsize::new(0);
     let bar = progress_bar(todo.len(), opts.progress);
     let write_error: Mutex<Option<HarnessError>> = Mutex::new(None);
+    let running: Arc<Mutex<BTreeMap<usize, (String, f64)>>> = Arc::default();
 
     std::thread::scope(|s| {
         for _ in 0..jobs.min(todo.len().max(1)) {
@@ -216,14 +217,30 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
                             max: report.render_max,
                             size: report.render_size,
                         });
-                    let row = run_cell(
+                    let label = format!("{} / {}", cell.labels.dataset, cell.labels.method);
+                    let progress: Option<ProgressFn> = (!bar.is_hidden()).then(|| {
+                        let (bar, running, label) = (bar.clone(), running.clone(), label.clone());
+                        Arc::new(move |f: f64| {
+                            if let Ok(mut r) = running.lock() {
+                                r.insert(i, (label.clone(), f));
+                                bar.set_message(running_message(&r));
+                            }
+                        }) as ProgressFn
+                    });
+                    let row = run_cell_with_progress(
                         cell,
                         &opts.worker,
                         timeout_s,
                         memory_limit,
                         opts.threads_per_worker,
                         render,
+                        progress,
                     );
+                    if let Ok(mut r) = running.lock()
+                        && r.remove(&i).is_some()
+                    {
+                        bar.set_message(running_message(&r));
+                    }
                     if row.status == Status::Ok {
                         ok.fetch_add(1, Ordering::SeqCst);
                     } else {
@@ -303,6 +320,14 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     })
 }
 
+/// The progress bar's message: the running cells that reported progress.
+fn running_message(r: &BTreeMap<usize, (String, f64)>) -> String {
+    r.values()
+        .map(|(l, f)| format!("{l} {:.0}%", 100.0 * f))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 fn progress_bar(n: usize, show: bool) -> indicatif::ProgressBar {
     use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
     let bar = ProgressBar::with_draw_target(
@@ -314,7 +339,7 @@ fn progress_bar(n: usize, show: bool) -> indicatif::ProgressBar {
         },
     );
     if let Ok(style) = ProgressStyle::with_template(
-        "{bar:40.cyan/blue} {pos}/{len} cells  {elapsed_precise}  ETA {eta_precise}",
+        "{bar:40.cyan/blue} {pos}/{len} cells  {elapsed_precise}  ETA {eta_precise}  {msg}",
     ) {
         bar.set_style(style);
     }
@@ -330,13 +355,38 @@ pub fn run_cell(
     threads: usize,
     render: Option<RenderRequest>,
 ) -> Row {
+    run_cell_with_progress(
+        cell,
+        worker,
+        timeout_s,
+        memory_limit_mib,
+        threads,
+        render,
+        None,
+    )
+}
+
+/// Receives the progress fractions a worker's method reports.
+pub type ProgressFn = Arc<dyn Fn(f64) + Send + Sync>;
+
+/// [`run_cell`], passing the method's progress reports to `progress` as they arrive.
+pub fn run_cell_with_progress(
+    cell: &Cell,
+    worker: &[OsString],
+    timeout_s: f64,
+    memory_limit_mib: Option<u64>,
+    threads: usize,
+    render: Option<RenderRequest>,
+    progress: Option<ProgressFn>,
+) -> Row {
     let t0 = Instant::now();
     let req = Request {
         cell: cell.clone(),
         timeout_s,
         render,
     };
-    let mut row = match spawn_and_wait(&req, worker, timeout_s, memory_limit_mib, threads) {
+    let mut row = match spawn_and_wait(&req, worker, timeout_s, memory_limit_mib, threads, progress)
+    {
         Ok(Outcome::Reply(reply)) => {
             let mut row = Row::failed(cell, reply.status, "");
             row.error = reply.error;
@@ -369,6 +419,7 @@ fn spawn_and_wait(
     timeout_s: f64,
     memory_limit_mib: Option<u64>,
     threads: usize,
+    progress: Option<ProgressFn>,
 ) -> std::io::Result<Outcome> {
     let payload = serde_json::to_vec(req).map_err(std::io::Error::other)?;
     let mut child = Command::new(&worker[0])
@@ -388,7 +439,7 @@ fn spawn_and_wait(
     let mut out = child.stdout.take();
     let mut err = child.stderr.take();
     let out_reader = std::thread::spawn(move || read_tail(out.as_mut(), 1 << 24));
-    let err_reader = std::thread::spawn(move || read_tail(err.as_mut(), 1 << 16));
+    let err_reader = std::thread::spawn(move || read_stderr(err.as_mut(), 1 << 16, progress));
 
     let t0 = Instant::now();
     let timeout = Duration::from_secs_f64(timeout_s);
@@ -457,6 +508,52 @@ fn read_tail(r: Option<&mut impl Read>, cap: usize) -> String {
         buf.drain(..buf.len() - cap);
     }
     String::from_utf8_lossy(&buf).into_owned()
+}
+
+/// Reads a worker's stderr to the end: progress lines go to `progress`, the rest is
+/// kept (its last `cap` bytes) for failure reasons.
+fn read_stderr(r: Option<&mut impl Read>, cap: usize, progress: Option<ProgressFn>) -> String {
+    let Some(r) = r else { return String::new() };
+    let mut kept = Vec::new();
+    let mut line = Vec::new();
+    let mut chunk = [0u8; 8192];
+    let take_line = |line: &mut Vec<u8>, kept: &mut Vec<u8>| {
+        let text = String::from_utf8_lossy(line);
+        match text.trim_end().strip_prefix(PROGRESS_PREFIX) {
+            Some(f) => {
+                if let (Some(p), Ok(f)) = (&progress, f.trim().parse::<f64>()) {
+                    p(f);
+                }
+            }
+            None => {
+                kept.extend_from_slice(line);
+                if kept.len() > 2 * cap {
+                    kept.drain(..kept.len() - cap);
+                }
+            }
+        }
+        line.clear();
+    };
+    loop {
+        match r.read(&mut chunk) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => {
+                for &b in &chunk[..n] {
+                    line.push(b);
+                    if b == b'\n' || line.len() > cap {
+                        take_line(&mut line, &mut kept);
+                    }
+                }
+            }
+        }
+    }
+    if !line.is_empty() {
+        take_line(&mut line, &mut kept);
+    }
+    if kept.len() > cap {
+        kept.drain(..kept.len() - cap);
+    }
+    String::from_utf8_lossy(&kept).into_owned()
 }
 
 fn stderr_tail(stderr: &str) -> String {

@@ -118,8 +118,12 @@ pub struct Cost {
     pub cpu_s: f64,
     /// Peak resident memory of the worker, MiB.
     pub peak_rss_mib: f64,
-    /// Per-phase times reported by the method.
+    /// Per-phase times reported by the method (a pipeline's earlier steps prefixed
+    /// `step/`).
     pub phases: Vec<(String, f64)>,
+    /// Wall time of each step of a pipeline, in order (left out for a single method).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub steps: Vec<(String, f64)>,
 }
 
 /// One result line.

@@ -64,6 +64,7 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
     for kind in [
         MethodKind::Normals,
         MethodKind::Features,
+        MethodKind::Filter,
         MethodKind::Reconstruct,
     ] {
         let gs: Vec<&Group> = groups.iter().filter(|g| g.kind == kind).collect();

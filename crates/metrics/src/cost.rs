@@ -6,8 +6,6 @@
 //! `VmHWM` of `/proc/self/status`: the high-water mark of the whole process since it
 //! started, so measure one job per process for per-job figures.
 
-use std::time::Instant;
-
 use serde::Serialize;
 
 use crate::report::{Entries, Report, put, serialize_as_entries};
@@ -56,95 +54,8 @@ pub struct Phase {
     pub cpu_s: Option<f64>,
 }
 
-/// Times named phases with the monotonic clock.
-///
-/// ```
-/// let mut t = reconbench_metrics::PhaseTimer::new();
-/// let x = t.time("build", || 1 + 1);
-/// t.start("query");
-/// t.stop();
-/// let report = t.report();
-/// assert_eq!(report.phases.len(), 2);
-/// # let _ = x;
-/// ```
-#[derive(Debug)]
-pub struct PhaseTimer {
-    created: Instant,
-    cpu_at_creation: Option<f64>,
-    phases: Vec<Phase>,
-    running: Option<(String, Instant, Option<f64>)>,
-}
-
-impl Default for PhaseTimer {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl PhaseTimer {
-    /// A timer; total wall and CPU time count from now.
-    pub fn new() -> Self {
-        PhaseTimer {
-            created: Instant::now(),
-            cpu_at_creation: cpu_time_seconds(),
-            phases: Vec::new(),
-            running: None,
-        }
-    }
-
-    /// Starts phase `name` (stopping the running one, if any).
-    pub fn start(&mut self, name: impl Into<String>) {
-        self.stop();
-        self.running = Some((name.into(), Instant::now(), cpu_time_seconds()));
-    }
-
-    /// Stops the running phase, if any, and records it.
-    pub fn stop(&mut self) {
-        if let Some((name, t0, c0)) = self.running.take() {
-            let wall_s = t0.elapsed().as_secs_f64();
-            let cpu_s = match (c0, cpu_time_seconds()) {
-                (Some(a), Some(b)) => Some(b - a),
-                _ => None,
-            };
-            self.phases.push(Phase {
-                name,
-                wall_s,
-                cpu_s,
-            });
-        }
-    }
-
-    /// Runs `f` as phase `name`.
-    pub fn time<T>(&mut self, name: impl Into<String>, f: impl FnOnce() -> T) -> T {
-        self.start(name);
-        let out = f();
-        self.stop();
-        out
-    }
-
-    /// The recorded phases.
-    pub fn phases(&self) -> &[Phase] {
-        &self.phases
-    }
-
-    /// Stops the running phase and summarises.
-    pub fn report(&mut self) -> CostReport {
-        self.stop();
-        let cpu_s = match (self.cpu_at_creation, cpu_time_seconds()) {
-            (Some(a), Some(b)) => Some(b - a),
-            _ => None,
-        };
-        CostReport {
-            phases: self.phases.clone(),
-            total_wall_s: self.created.elapsed().as_secs_f64(),
-            total_cpu_s: cpu_s,
-            threads: rayon::current_num_threads(),
-            peak_rss_bytes: peak_rss_bytes(),
-        }
-    }
-}
-
-/// Summary of a [`PhaseTimer`].
+/// Cost summary of a run: its phases (from geom's [`PhaseTimer`], the one timer of the
+/// project), process CPU time, threads and peak memory.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CostReport {
     /// Timed phases, in order.

@@ -9,7 +9,7 @@
 use reconbench_geom::{PointCloud, TriMesh};
 use serde::{Deserialize, Serialize};
 
-use crate::cost::{CostReport, PhaseTimer};
+use crate::cost::CostReport;
 use crate::distance::{DistanceEval, DistanceOptions, eval_distance};
 use crate::error::Result;
 use crate::features::{
@@ -20,6 +20,7 @@ use crate::quality::{QualityEval, QualityOptions, eval_quality};
 use crate::reference::Reference;
 use crate::report::{Entries, Report, put, serialize_as_entries};
 use crate::topology::{GroundTruthTopology, TopologyEval, TopologyOptions, eval_topology};
+use reconbench_geom::method::PhaseTimer;
 
 pub use crate::normals::{NormalGroundTruth, eval_cloud_normals};
 
@@ -86,7 +87,7 @@ pub fn eval_mesh(
     reference: &Reference,
     opts: &MeshEvalOptions,
 ) -> Result<MeshEval> {
-    let mut timer = PhaseTimer::new();
+    let mut timer = PhaseTimer::default();
     let distance = timer.time("distance", || {
         eval_distance(mesh, reference, &opts.distance)
     })?;
@@ -112,7 +113,7 @@ pub fn eval_mesh(
         topology,
         quality,
         features,
-        cost: timer.report(),
+        cost: CostReport::from_run_timer(&timer),
     })
 }
 

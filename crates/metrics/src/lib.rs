@@ -33,7 +33,7 @@ pub mod topology;
 
 mod boxtree;
 
-pub use cost::{CostReport, PhaseTimer, cpu_time_seconds, peak_rss_bytes};
+pub use cost::{CostReport, cpu_time_seconds, peak_rss_bytes};
 pub use distance::{DistanceEval, DistanceOptions, FScore, Sides, eval_distance};
 pub use error::{MetricsError, Result};
 pub use eval::{MeshEval, MeshEvalOptions, eval_cloud_features, eval_mesh};

@@ -7,6 +7,7 @@ use common::{
     Lcg, TestSphere, brute_distance, concat, icosahedron, translate, unweld, without_face,
 };
 use glam::{DQuat, DVec3};
+use reconbench_geom::method::PhaseTimer;
 use reconbench_geom::topology::examples::{cube, square_grid, torus_grid, uv_sphere};
 use reconbench_geom::{Channel, PointCloud, TriMesh};
 use reconbench_metrics::distance::{DistanceOptions, Sides, eval_distance};
@@ -19,7 +20,7 @@ use reconbench_metrics::quality::{QualityOptions, eval_quality, triangle_quality
 use reconbench_metrics::topology::{
     GroundTruthTopology, TopologyOptions, count_self_intersections, eval_topology,
 };
-use reconbench_metrics::{PhaseTimer, Reference, Report, peak_rss_bytes};
+use reconbench_metrics::{CostReport, Reference, Report, peak_rss_bytes};
 use reconbench_synth::FeatureCurve;
 
 fn small_opts() -> DistanceOptions {
@@ -657,10 +658,10 @@ fn eval_mesh_reports_the_documented_keys() {
 
 #[test]
 fn cost_helpers() {
-    let mut t = PhaseTimer::new();
+    let mut t = PhaseTimer::default();
     let v = t.time("spin", || (0..100_000u64).sum::<u64>());
     assert_eq!(v, 4_999_950_000);
-    let r = t.report();
+    let r = CostReport::from_run_timer(&t);
     assert_eq!(r.phases.len(), 1);
     assert!(r.phases[0].wall_s >= 0.0);
     if cfg!(target_os = "linux") {

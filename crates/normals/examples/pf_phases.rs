@@ -90,8 +90,7 @@ fn main() {
         let t_pf = t.elapsed().as_secs_f64();
         std::hint::black_box(&out);
         let phases: Vec<String> = ctx
-            .timer
-            .phases
+            .phases()
             .iter()
             .map(|(p, s)| format!("{p} {s:.3}"))
             .collect();

@@ -9,10 +9,12 @@ use glam::{DMat3, DVec3};
 use nalgebra::{SMatrix, SVector};
 use reconbench_geom::PointCloud;
 use reconbench_geom::linalg::sym_eigen3;
-use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
+use reconbench_geom::method::{
+    Describe, MethodError, NormalEstimator, Normals, ParamDoc, RunCtx, Unit,
+};
 use serde::{Deserialize, Serialize};
 
-use crate::neighbors::estimate_per_point;
+use crate::neighbors::{ORIENT_K_DOC, check_k, estimate_per_point};
 use crate::plane_fit::fit_plane_normal;
 
 /// Parameters of `jet`.
@@ -89,9 +91,29 @@ pub fn jet_normal(points: &[DVec3], row: &[u32]) -> DVec3 {
     }
 }
 
+impl Describe for Jet {
+    const NAME: &'static str = "jet";
+    const SOURCE: &'static str = "baseline (CGAL)";
+    const SUMMARY: &'static str = "degree-2 osculating jet (Cazals & Pouget 2005)";
+    type Params = JetParams;
+    const PARAMS: &'static [ParamDoc] = &[
+        ParamDoc::new(
+            "k",
+            Unit::Count,
+            "neighbourhood size incl. the point itself (CGAL examples: 18)",
+        ),
+        ORIENT_K_DOC,
+    ];
+
+    fn from_params(params: JetParams) -> Result<Self, MethodError> {
+        check_k("k", params.k, 6)?;
+        Ok(Self { params })
+    }
+}
+
 impl NormalEstimator for Jet {
     fn name(&self) -> &str {
-        "jet"
+        Self::NAME
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {

@@ -11,10 +11,12 @@
 use glam::{DVec2, DVec3};
 use nalgebra::{SMatrix, SVector};
 use reconbench_geom::PointCloud;
-use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
+use reconbench_geom::method::{
+    Describe, MethodError, NormalEstimator, Normals, ParamDoc, RunCtx, Unit,
+};
 use serde::{Deserialize, Serialize};
 
-use crate::neighbors::estimate_per_point;
+use crate::neighbors::{ORIENT_K_DOC, check_k, estimate_per_point};
 use crate::plane_fit::fit_plane_normal;
 
 /// Largest supported k: neighbourhoods live in fixed-size stack buffers.
@@ -157,18 +159,44 @@ fn one_ring_normal(ring: &mut [usize], local: &[DVec3]) -> Option<DVec3> {
     (n != DVec3::ZERO).then_some(n)
 }
 
+fn check_max_k(k: usize) -> Result<(), MethodError> {
+    if k > MAX_K {
+        return Err(MethodError::InvalidParameter {
+            name: "k".into(),
+            message: format!("at most {MAX_K}, got {k}"),
+        });
+    }
+    Ok(())
+}
+
+impl Describe for LvmApprox {
+    const NAME: &'static str = "lvm-approx";
+    const SOURCE: &'static str = "seed 000 §1.2.6";
+    const SUMMARY: &'static str = "local Voronoi mesh stand-in (ASSUMPTION B-09)";
+    type Params = LvmApproxParams;
+    const PARAMS: &'static [ParamDoc] = &[
+        ParamDoc::new(
+            "k",
+            Unit::Count,
+            "neighbourhood size incl. the point itself (ASSUMPTION B-09: 15; at most 64)",
+        ),
+        ORIENT_K_DOC,
+    ];
+
+    fn from_params(params: LvmApproxParams) -> Result<Self, MethodError> {
+        check_k("k", params.k, 4)?;
+        check_max_k(params.k)?;
+        Ok(Self { params })
+    }
+}
+
 impl NormalEstimator for LvmApprox {
     fn name(&self) -> &str {
-        "lvm-approx"
+        Self::NAME
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
-        if self.params.k > MAX_K {
-            return Err(MethodError::InvalidParameter {
-                name: "k".into(),
-                message: format!("at most {MAX_K}, got {}", self.params.k),
-            });
-        }
+        check_max_k(self.params.k)?;
         let p = &self.params;
         estimate_per_point(cloud, ctx, p.k, 4, p.orient_k, lvm_normal)
     }

@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use reconbench_geom::PointCloud;
-use reconbench_geom::method::{Diagnostic, MethodError, Normals, RunCtx};
+use reconbench_geom::method::{Diagnostic, MethodError, Normals, ParamDoc, RunCtx, Unit};
 use reconbench_geom::spatial::{KnnHit, knn_self_map, knn_self_table};
 
 use crate::orient::orient_mst;
@@ -96,6 +96,13 @@ pub fn row_points(
     let me = points[i];
     (0..hits.len()).map(move |j| row_slot(sp, j).map_or(me, |h| hits[h].point))
 }
+
+/// Doc of the `orient_k` parameter every estimator of this crate shares.
+pub const ORIENT_K_DOC: ParamDoc = ParamDoc::new(
+    "orient_k",
+    Unit::Count,
+    "neighbours of the MST orientation graph (Hoppe); 0 leaves normals unoriented",
+);
 
 /// Checks a neighbourhood size parameter.
 pub fn check_k(name: &str, k: usize, min: usize) -> Result<(), MethodError> {

@@ -7,11 +7,13 @@
 use glam::{DMat3, DVec3};
 use reconbench_geom::PointCloud;
 use reconbench_geom::linalg::sym_eigen3_smallest_planar;
-use reconbench_geom::method::{MethodError, NormalEstimator, Normals, RunCtx};
+use reconbench_geom::method::{
+    Describe, MethodError, NormalEstimator, Normals, ParamDoc, RunCtx, Unit,
+};
 use reconbench_geom::spatial::KnnHit;
 use serde::{Deserialize, Serialize};
 
-use crate::neighbors::{estimate_per_point_hits, row_points};
+use crate::neighbors::{ORIENT_K_DOC, check_k, estimate_per_point_hits, row_points};
 
 /// Relative eigenvalue gap under which a neighbourhood counts as degenerate (coincident
 /// or collinear points): the normal is then undetermined and reported as zero.
@@ -161,9 +163,29 @@ pub fn normal_of_covariance(m: DMat3) -> DVec3 {
     }
 }
 
+impl Describe for PlaneFit {
+    const NAME: &'static str = "pf";
+    const SOURCE: &'static str = "seed 000 §1.2.4";
+    const SUMMARY: &'static str = "k-NN plane fit (Hoppe et al. 1992)";
+    type Params = PlaneFitParams;
+    const PARAMS: &'static [ParamDoc] = &[
+        ParamDoc::new(
+            "k",
+            Unit::Count,
+            "neighbourhood size incl. the point itself (seed 000: 30, ASSUMPTION B-06/B-07)",
+        ),
+        ORIENT_K_DOC,
+    ];
+
+    fn from_params(params: PlaneFitParams) -> Result<Self, MethodError> {
+        check_k("k", params.k, 3)?;
+        Ok(Self { params })
+    }
+}
+
 impl NormalEstimator for PlaneFit {
     fn name(&self) -> &str {
-        "pf"
+        Self::NAME
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
@@ -174,9 +196,34 @@ impl NormalEstimator for PlaneFit {
     }
 }
 
+impl Describe for WeightedPlaneFit {
+    const NAME: &'static str = "wpf";
+    const SOURCE: &'static str = "seed 000 §1.2.5";
+    const SUMMARY: &'static str = "Gaussian-weighted plane fit (Pauly et al. 2003)";
+    type Params = WeightedPlaneFitParams;
+    const PARAMS: &'static [ParamDoc] = &[
+        ParamDoc::new(
+            "k",
+            Unit::Count,
+            "neighbourhood size incl. the point itself (seed 000: 40, ASSUMPTION B-06)",
+        ),
+        ParamDoc::new(
+            "sigma_rule",
+            Unit::Choice,
+            "third-square: sigma^2 = d_k^2/3 (ASSUMPTION B-08); third-distance: sigma = d_k/3",
+        ),
+        ORIENT_K_DOC,
+    ];
+
+    fn from_params(params: WeightedPlaneFitParams) -> Result<Self, MethodError> {
+        check_k("k", params.k, 3)?;
+        Ok(Self { params })
+    }
+}
+
 impl NormalEstimator for WeightedPlaneFit {
     fn name(&self) -> &str {
-        "wpf"
+        Self::NAME
     }
 
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {

@@ -104,7 +104,7 @@ fn main() {
             rec.refused.len() - r
         );
     }
-    for (k, v) in &ctx.timer.phases {
+    for (k, v) in &ctx.phases() {
         println!("  phase {k}: {v:.3} s");
     }
     for (k, v) in &rec.diagnostics {

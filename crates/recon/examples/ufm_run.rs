@@ -54,7 +54,7 @@ fn main() {
             Diagnostic::Text(s) => println!("{k:22} {s}"),
         }
     }
-    for (name, s) in &ctx.timer.phases {
+    for (name, s) in &ctx.phases() {
         println!("phase {name:16} {s:.3} s");
     }
     let rep = analyze(&r.mesh);

@@ -388,7 +388,7 @@ fn diagnostics_and_phases_are_reported() {
     }
     for ph in ["density", "grid", "grow", "output"] {
         assert!(
-            ctx.timer.phases.iter().any(|(n, _)| n == ph),
+            ctx.phases().iter().any(|(n, _)| n == ph),
             "missing phase {ph}"
         );
     }

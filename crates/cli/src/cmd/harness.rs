@@ -54,6 +54,11 @@ pub enum HarnessCommand {
         after_help = "Example:\n  reconbench features --method gt-features cloud.ply -o labelled.ply --set radius=0.02"
     )]
     Features(OneShotArgs),
+    /// Filter one point cloud file with a registered filter (cloud in, cloud out).
+    #[command(
+        after_help = "Example:\n  reconbench filter --method statistical-outliers scan.ply -o clean.ply --set std_ratio=2"
+    )]
+    Filter(OneShotArgs),
     /// (Re)write tables, plots and report.md of a results directory.
     #[command(after_help = "Example:\n  reconbench report results/quickstart")]
     Report(ReportArgs),
@@ -239,6 +244,7 @@ pub fn run(cmd: HarnessCommand) -> CliResult {
         HarnessCommand::Reconstruct(a) => one_shot(MethodKind::Reconstruct, a),
         HarnessCommand::Normals(a) => one_shot(MethodKind::Normals, a),
         HarnessCommand::Features(a) => one_shot(MethodKind::Features, a),
+        HarnessCommand::Filter(a) => one_shot(MethodKind::Filter, a),
         HarnessCommand::Report(a) => report(a),
         HarnessCommand::Baseline(c) => baseline(c),
         HarnessCommand::Compare(a) => compare_cmd(a),
@@ -382,6 +388,12 @@ fn list(a: ListArgs) -> CliResult {
                 ""
             }
         );
+        if m.needs != registry::Needs::Positions {
+            println!(
+                "    needs {} (put a normal estimator before it in `steps`)",
+                m.needs.as_str()
+            );
+        }
         for p in &m.params {
             let unit = if p.unit.is_empty() {
                 String::new()
@@ -524,6 +536,9 @@ fn compare_cmd(a: CompareArgs) -> CliResult {
         }
         for n in &c.new {
             println!("  new       {n}");
+        }
+        for r in &c.rekeyed {
+            println!("  re-keyed  {r} (key changed, matched by its label)");
         }
     }
     if c.has_regressions() {

@@ -21,7 +21,7 @@ use reconbench_synth::Shape;
 use serde::{Deserialize, Serialize};
 
 use crate::registry::{
-    GroundTruth, MethodEntry, MethodEnv, ParamDoc, features, normals, reconstruct,
+    Built, GroundTruth, MethodEntry, MethodEnv, MethodKind, ParamDoc, Unit, custom,
 };
 
 /// Parameters of `gt-normals` (none).
@@ -70,15 +70,16 @@ impl NormalEstimator for GtNormals {
 
 /// Registry entry of `gt-normals`.
 pub fn gt_normals() -> MethodEntry {
-    normals::<GtNormalsParams>(
+    custom::<GtNormalsParams>(
+        MethodKind::Normals,
         "gt-normals",
         "oracle",
         "ground-truth normals (the metric floor); outside experiments: the file's normals",
         &[],
         |_p, env: &MethodEnv| {
-            Ok(Box::new(GtNormals {
+            Ok(Built::Normals(Box::new(GtNormals {
                 gt: env.ground_truth.clone(),
-            }))
+            })))
         },
     )
     .oracle()
@@ -106,16 +107,16 @@ impl Default for GtFeaturesParams {
 }
 
 const GT_FEATURES_DOCS: &[ParamDoc] = &[
-    ParamDoc {
-        name: "radius_factor",
-        unit: "spacing",
-        doc: "label points whose clean position is within this many mean spacings of a feature curve",
-    },
-    ParamDoc {
-        name: "radius",
-        unit: "diag",
-        doc: "explicit radius; overrides radius_factor when > 0",
-    },
+    ParamDoc::new(
+        "radius_factor",
+        Unit::Spacing,
+        "label points whose clean position is within this many mean spacings of a feature curve",
+    ),
+    ParamDoc::new(
+        "radius",
+        Unit::Diag,
+        "explicit radius; overrides radius_factor when > 0",
+    ),
 ];
 
 /// `gt-features`: labels points by their true distance to a feature curve.
@@ -183,7 +184,8 @@ impl FeatureDetector for GtFeatures {
 
 /// Registry entry of `gt-features`.
 pub fn gt_features() -> MethodEntry {
-    features::<GtFeaturesParams>(
+    custom::<GtFeaturesParams>(
+        MethodKind::Features,
         "gt-features",
         "oracle",
         "labels points within r of a true feature curve, r as the feature metric (the feature floor)",
@@ -197,11 +199,11 @@ pub fn gt_features() -> MethodEntry {
                     });
                 }
             }
-            Ok(Box::new(GtFeatures {
+            Ok(Built::Features(Box::new(GtFeatures {
                 gt: env.ground_truth.clone(),
                 radius_factor: p.radius_factor,
                 radius: p.radius,
-            }))
+            })))
         },
     )
     .oracle()
@@ -228,16 +230,16 @@ impl Default for ReferenceMeshParams {
 }
 
 const REFERENCE_MESH_DOCS: &[ParamDoc] = &[
-    ParamDoc {
-        name: "resolution",
-        unit: "count",
-        doc: "segments along the longest parametric direction of the shape",
-    },
-    ParamDoc {
-        name: "shape",
-        unit: "",
-        doc: "shape spec used outside experiments (e.g. torus:R=0.5,r=0.2)",
-    },
+    ParamDoc::new(
+        "resolution",
+        Unit::Count,
+        "segments along the longest parametric direction of the shape",
+    ),
+    ParamDoc::new(
+        "shape",
+        Unit::None,
+        "shape spec used outside experiments (e.g. torus:R=0.5,r=0.2)",
+    ),
 ];
 
 /// `reference-mesh`: the shape's reference mesh.
@@ -290,7 +292,8 @@ impl Reconstructor for ReferenceMesh {
 
 /// Registry entry of `reference-mesh`.
 pub fn reference_mesh() -> MethodEntry {
-    reconstruct::<ReferenceMeshParams>(
+    custom::<ReferenceMeshParams>(
+        MethodKind::Reconstruct,
         "reference-mesh",
         "oracle",
         "the ground-truth shape's reference mesh (the geometry floor)",
@@ -302,11 +305,11 @@ pub fn reference_mesh() -> MethodEntry {
                     message: format!("must be in 3..=4096, got {}", p.resolution),
                 });
             }
-            Ok(Box::new(ReferenceMesh {
+            Ok(Built::Reconstruct(Box::new(ReferenceMesh {
                 shape: env.ground_truth.as_ref().and_then(|g| g.shape.clone()),
                 spec: p.shape,
                 resolution: p.resolution,
-            }))
+            })))
         },
     )
     .oracle()

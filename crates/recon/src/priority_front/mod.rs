@@ -69,9 +69,7 @@ impl PriorityFront {
 
 /// Records `name` as a phase that started at `t0` (for phases that need `ctx` inside).
 fn end_phase(ctx: &mut RunCtx, name: &str, t0: Instant) {
-    ctx.timer
-        .phases
-        .push((name.to_string(), t0.elapsed().as_secs_f64()));
+    ctx.record_phase(name, t0.elapsed().as_secs_f64());
 }
 
 fn num(d: &mut Diagnostics, k: &str, v: f64) {

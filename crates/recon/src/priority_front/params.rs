@@ -1,6 +1,6 @@
 //! Parameters of `priority-front` (spec 001 §2 and the ASSUMPTION register §4.10).
 
-use reconbench_geom::method::MethodError;
+use reconbench_geom::method::{Describe, MethodError, ParamDoc, Unit};
 use serde::{Deserialize, Serialize};
 
 /// How many points the density estimate ρ samples (ASSUMPTION A1).
@@ -295,172 +295,191 @@ impl PriorityFrontParams {
     }
 }
 
-/// Name, unit and one-line doc of every parameter, for the harness registry's
-/// `ParamDoc` list (units as the registry spells them).
-pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
-    (
+/// Docs of every parameter of [`PriorityFrontParams`], in `list` order.
+pub const PARAM_DOCS: &[ParamDoc] = &[
+    ParamDoc::new(
         "k",
-        "spacing",
+        Unit::Spacing,
         "candidate ball radius R = k * rho (paper: 4)",
     ),
-    (
+    ParamDoc::new(
         "alpha_max_deg",
-        "deg",
+        Unit::Deg,
         "upper bound on every triangle angle (paper: 120)",
     ),
-    (
+    ParamDoc::new(
         "beta_max_deg",
-        "deg",
+        Unit::Deg,
         "upper bound on the normal change across the front edge (paper: 90)",
     ),
-    ("w1", "", "score weight of cos(beta) (paper: 1)"),
-    ("w2", "", "score weight of cos(gamma) (paper: 1)"),
-    ("w3", "", "score weight of (R - d)/R (paper: 1)"),
-    (
+    ParamDoc::new("w1", Unit::None, "score weight of cos(beta) (paper: 1)"),
+    ParamDoc::new("w2", Unit::None, "score weight of cos(gamma) (paper: 1)"),
+    ParamDoc::new("w3", Unit::None, "score weight of (R - d)/R (paper: 1)"),
+    ParamDoc::new(
         "seed_patches",
-        "count",
+        Unit::Count,
         "random patches tried for a seed, m (A4: 8)",
     ),
-    (
+    ParamDoc::new(
         "patch_neighbours",
-        "count",
+        Unit::Count,
         "neighbours / fan triangles per patch, n (A5/A6: 12)",
     ),
-    (
+    ParamDoc::new(
         "rho_sample",
-        "",
+        Unit::Choice,
         "rho sample rule: max100-or5-percent (A1) or fixed100",
     ),
-    (
+    ParamDoc::new(
         "grid_cell",
-        "",
+        Unit::None,
         "hash-grid cell edge in units of R (A2: 1; speed only)",
     ),
-    (
+    ParamDoc::new(
         "score_distance",
-        "",
+        Unit::Choice,
         "d(t) of the score: midpoint (A11) or segment",
     ),
-    (
+    ParamDoc::new(
         "apex_angle_rule",
-        "",
+        Unit::Flag,
         "apply alpha_max to the apex angle too (A12; default false, spec: true)",
     ),
-    (
+    ParamDoc::new(
         "seed_outward",
-        "",
+        Unit::Flag,
         "orient the seed away from the centroid (A9)",
     ),
-    ("link_prev", "", "allow the mirrored link operation (A16)"),
-    ("glue_mirror", "", "try the mirrored glue repair (A17)"),
-    (
+    ParamDoc::new(
+        "link_prev",
+        Unit::Flag,
+        "allow the mirrored link operation (A16)",
+    ),
+    ParamDoc::new(
+        "glue_mirror",
+        Unit::Flag,
+        "try the mirrored glue repair (A17)",
+    ),
+    ParamDoc::new(
         "cross_radius",
-        "",
+        Unit::None,
         "front edges within this many R are crossing-tested (spec: 2)",
     ),
-    (
+    ParamDoc::new(
         "reject_free_inside",
-        "",
+        Unit::Flag,
         "reject t when a Free point lies inside (a,t,b) in 2-D (off)",
     ),
-    (
+    ParamDoc::new(
         "front_inside_check",
-        "",
+        Unit::Flag,
         "reject t when a front vertex lies inside (a,t,b) in 2-D (I6; true)",
     ),
-    (
+    ParamDoc::new(
         "fill_any_angle",
-        "",
+        Unit::Flag,
         "waive Rule 1 for FILL of a 3-edge hole (I3; true)",
     ),
-    (
+    ParamDoc::new(
         "sector_check",
-        "",
+        Unit::Flag,
         "new edges must lie in the free sector of their end vertices (I4; true)",
     ),
-    (
+    ParamDoc::new(
         "revisit_passes",
-        "count",
+        Unit::Count,
         "passes over the live front after the heap empties (I2: 4; 0 = paper)",
     ),
-    (
+    ParamDoc::new(
         "free_elevation_max_deg",
-        "deg",
+        Unit::Deg,
         "max elevation of a Free candidate above the fan tangent plane (I5: 30; 90 = off)",
     ),
-    (
+    ParamDoc::new(
         "free_height_max",
-        "spacing",
+        Unit::Spacing,
         "max height of a Free candidate above the fan tangent plane, in rho (I5: 0.5)",
     ),
-    (
+    ParamDoc::new(
         "support_neighbours",
-        "count",
+        Unit::Count,
         "I8: neighbours of the support plane that lets a Free point above the I5 cap in (12; 0 = off)",
     ),
-    (
+    ParamDoc::new(
         "support_tolerance",
-        "spacing",
+        Unit::Spacing,
         "I8: distance tolerance of the support plane, in rho (0.25)",
     ),
-    (
+    ParamDoc::new(
         "stitch_one_sided",
-        "",
+        Unit::Flag,
         "threads > 1: sweep each slab band from one side first (true)",
     ),
-    (
+    ParamDoc::new(
         "stitch_zip",
-        "",
+        Unit::Flag,
         "threads > 1: zip pairs of parallel front loops left along a slab cut (I9: true)",
     ),
-    (
+    ParamDoc::new(
         "support_radius",
-        "",
+        Unit::None,
         "I8: neighbour search radius in units of R (2)",
     ),
-    (
+    ParamDoc::new(
         "support_share",
-        "",
+        Unit::None,
         "I8: share of the neighbours the support plane must hold (0.5)",
     ),
-    (
+    ParamDoc::new(
         "close_holes_max",
-        "count",
+        Unit::Count,
         "ear-clip leftover loops of at most this many vertices (I7: 10; 0 = paper)",
     ),
-    (
+    ParamDoc::new(
         "restart",
-        "",
+        Unit::Flag,
         "re-seed while Free point patches remain (M8)",
     ),
-    (
+    ParamDoc::new(
         "restart_min_points",
-        "count",
+        Unit::Count,
         "minimum Free patch size that triggers a restart (A10: 10)",
     ),
-    (
+    ParamDoc::new(
         "restart_radius_cap",
-        "",
+        Unit::None,
         "restart radius cap in units of R0 (A10: 2)",
     ),
-    (
+    ParamDoc::new(
         "restart_max_flatness",
-        "",
+        Unit::None,
         "max patch flatness score of restart seeds (I1: 0.2)",
     ),
-    (
+    ParamDoc::new(
         "max_seeds",
-        "count",
+        Unit::Count,
         "bound on the number of seeds, 0 = none",
     ),
-    (
+    ParamDoc::new(
         "seed_point",
-        "",
+        Unit::Count,
         "force the first seed patch centre (point index)",
     ),
-    (
+    ParamDoc::new(
         "threads",
-        "count",
+        Unit::Count,
         "slab-parallel growth threads (1 = sequential)",
     ),
 ];
+
+impl Describe for super::PriorityFront {
+    const NAME: &'static str = super::NAME;
+    const SOURCE: &'static str = "seed 001 §4";
+    const SUMMARY: &'static str = "priority-driven advancing front (Li, Han & Wee); deviations in docs/methods/priority_front.md";
+    type Params = PriorityFrontParams;
+    const PARAMS: &'static [ParamDoc] = PARAM_DOCS;
+
+    fn from_params(params: PriorityFrontParams) -> Result<Self, MethodError> {
+        Self::new(params)
+    }
+}

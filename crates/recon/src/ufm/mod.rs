@@ -97,8 +97,8 @@ pub fn run_ufm(
     let cx = build_complex(points, params, ctx)?;
     ctx.checkpoint()?;
     let st = engine::run(cx, params, ctx)?;
-    ctx.timer.phases.push(("init".into(), st.init_s));
-    ctx.timer.phases.push(("iterate".into(), st.iterate_s));
+    ctx.record_phase("init", st.init_s);
+    ctx.record_phase("iterate", st.iterate_s);
     Ok(st)
 }
 
@@ -213,7 +213,7 @@ impl Reconstructor for Ufm {
         };
         let to_input = |k: u32| perm.as_ref().map_or(k, |p| p[k as usize]);
         let st = run_ufm(run_pts, p, ctx)?;
-        let dt_s = ctx.timer.seconds("delaunay");
+        let dt_s = ctx.phase_seconds("delaunay");
         let t_out = Instant::now();
         let dt = &st.cx.dt;
         let nv = dt.n_vertices();
@@ -239,7 +239,7 @@ impl Reconstructor for Ufm {
         let topo = MeshTopology::new(&mesh);
         let rep = analyze_with(&mesh, &topo);
         let output_s = t_out.elapsed().as_secs_f64();
-        ctx.timer.phases.push(("output".into(), output_s));
+        ctx.record_phase("output", output_s);
 
         let mut d = Diagnostics::new();
         let matched = st.trace.last().copied().unwrap_or(0.0);

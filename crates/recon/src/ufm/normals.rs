@@ -14,7 +14,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{
-    Diagnostic, Diagnostics, MethodError, NormalEstimator, Normals, RunCtx,
+    Describe, Diagnostic, Diagnostics, MethodError, NormalEstimator, Normals, ParamDoc, RunCtx,
+    Unit,
 };
 use reconbench_geom::spatial::PointIndex;
 use reconbench_normals::orient_mst;
@@ -72,28 +73,36 @@ impl Default for UfmMeshParams {
     }
 }
 
-/// Name, unit and one-line doc of every parameter, for the harness registry.
-pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
-    (
+/// Docs of every parameter of [`UfmMeshParams`], in `list` order.
+pub const PARAM_DOCS: &[ParamDoc] = &[
+    ParamDoc::new(
         "state",
-        "",
+        Unit::Choice,
         "B-01: UFM state the normals use: final (default) or initial",
     ),
-    (
+    ParamDoc::new(
         "rings",
-        "count",
+        Unit::Count,
         "1 = Algorithm B; 2 = two-ring weighted plane fit (B-05)",
     ),
-    (
+    ParamDoc::new(
         "orient_k",
-        "count",
+        Unit::Count,
         "neighbours of the MST orientation graph (B-04: 10); 0 leaves normals unoriented",
     ),
-    ("max_iter", "count", "UFM: most update iterations (A-07)"),
-    ("init", "", "UFM: initial cluster, gabriel or delaunay"),
-    (
+    ParamDoc::new(
+        "max_iter",
+        Unit::Count,
+        "UFM: most update iterations (A-07)",
+    ),
+    ParamDoc::new(
+        "init",
+        Unit::Choice,
+        "UFM: initial cluster, gabriel or delaunay",
+    ),
+    ParamDoc::new(
         "lock_matched",
-        "",
+        Unit::Flag,
         "UFM: (3) facets non-removable during the update (A-09)",
     ),
 ];
@@ -313,6 +322,19 @@ pub fn estimate_from_state(st: &UfmState, rings: u32) -> (Vec<DVec3>, Vec<Branch
         }
     }
     (normals, branch)
+}
+
+impl Describe for UfmMesh {
+    const NAME: &'static str = NAME;
+    const SOURCE: &'static str = "seed 000 §1.2.3";
+    const SUMMARY: &'static str =
+        "local-mesh matching normals (Ma 2011 ch. 4, Algorithm B) on the UFM state";
+    type Params = UfmMeshParams;
+    const PARAMS: &'static [ParamDoc] = PARAM_DOCS;
+
+    fn from_params(params: UfmMeshParams) -> Result<Self, MethodError> {
+        Self::new(params)
+    }
 }
 
 impl NormalEstimator for UfmMesh {

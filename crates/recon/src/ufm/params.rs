@@ -1,6 +1,6 @@
 //! Parameters of `ufm` (spec 000 §1.1 and the assumption register, Appendix A).
 
-use reconbench_geom::method::MethodError;
+use reconbench_geom::method::{Describe, MethodError, ParamDoc, Unit};
 use serde::{Deserialize, Serialize};
 
 /// Where the initial umbrellas (Step 2) start from.
@@ -130,11 +130,13 @@ pub struct UfmParams {
     /// folds back over itself; its most folded facet is made removable first and
     /// unlocked, and the umbrella rebuilt (up to 3 times). Folded fully matched
     /// umbrellas are not frozen. `0` = off (the thesis's literal loop).
+    #[serde(rename = "max_fold_deg", alias = "max_fold")]
     pub max_fold: f64,
     /// Algorithm C (chapter 5): NVC filtering in the update; `off` = chapter 3.
     pub nvc: Nvc,
     /// Generic cone angle `α_gen` in degrees (spec: 45 = π/4); also the clamp of
     /// `α_flat` (ASSUMPTION C-02).
+    #[serde(rename = "nvc_angle_deg", alias = "nvc_angle")]
     pub nvc_angle: f64,
     /// `α_flat = nvc_flat_factor · θ̄` (spec: 2, "doubling the average dihedral angle").
     pub nvc_flat_factor: f64,
@@ -196,13 +198,13 @@ impl UfmParams {
         }
         if !(0.0..=180.0).contains(&self.max_fold) {
             return Err(MethodError::InvalidParameter {
-                name: "max_fold".into(),
+                name: "max_fold_deg".into(),
                 message: format!("must be in [0, 180] degrees, got {}", self.max_fold),
             });
         }
         if !(self.nvc_angle > 0.0 && self.nvc_angle <= 90.0) {
             return Err(MethodError::InvalidParameter {
-                name: "nvc_angle".into(),
+                name: "nvc_angle_deg".into(),
                 message: format!("must be in (0, 90] degrees, got {}", self.nvc_angle),
             });
         }
@@ -228,96 +230,109 @@ impl UfmParams {
     }
 }
 
-/// Name, unit and one-line doc of every parameter, for the harness registry.
-pub const PARAM_DOCS: &[(&str, &str, &str)] = &[
-    (
+/// Docs of every parameter of [`UfmParams`], in `list` order.
+pub const PARAM_DOCS: &[ParamDoc] = &[
+    ParamDoc::new(
         "init",
-        "",
+        Unit::Choice,
         "initial cluster: gabriel (Step 2, falls back to all DT_v) or delaunay",
     ),
-    (
+    ParamDoc::new(
         "lock_matched",
-        "",
+        Unit::Flag,
         "A-09: (3) facets are non-removable during the update (A-04 cascade rule)",
     ),
-    (
+    ParamDoc::new(
         "freeze_full",
-        "",
+        Unit::Flag,
         "A-08: keep fully matched umbrellas (exact optimisation)",
     ),
-    (
+    ParamDoc::new(
         "size_order",
-        "",
+        Unit::Choice,
         "A-06: size order inside a class: large-first or small-first",
     ),
-    (
+    ParamDoc::new(
         "output",
-        "",
+        Unit::Choice,
         "A-11: output set: matched-facets (M_f = 3) or full-umbrellas",
     ),
-    (
+    ParamDoc::new(
         "update",
-        "",
+        Unit::Choice,
         "jacobi (synchronous, the thesis) or gauss-seidel (sequential ablation)",
     ),
-    (
+    ParamDoc::new(
         "max_iter",
-        "count",
+        Unit::Count,
         "A-07 (iv): most update iterations (0 = initial umbrellas only)",
     ),
-    (
+    ParamDoc::new(
         "patience",
-        "count",
+        Unit::Count,
         "A-07 (iii): stop after this many iterations without a better matching",
     ),
-    (
+    ParamDoc::new(
         "escapes",
-        "count",
+        Unit::Count,
         "extension: updates ignoring M_f(v) when stuck below 100 % (0 = thesis)",
     ),
-    (
-        "max_fold",
-        "deg",
+    ParamDoc::new(
+        "max_fold_deg",
+        Unit::Deg,
         "deviation: rebuild umbrellas folding back by more than this angle (0 = thesis)",
     ),
-    (
+    ParamDoc::new(
         "nvc",
-        "",
+        Unit::Choice,
         "Algorithm C (ch. 5) normal vector cones: off, generic (pi/4), flatness, flat-only",
     ),
-    (
-        "nvc_angle",
-        "deg",
+    ParamDoc::new(
+        "nvc_angle_deg",
+        Unit::Deg,
         "generic cone angle (45 = pi/4); also the clamp of the flatness cone (C-02)",
     ),
-    (
+    ParamDoc::new(
         "nvc_flat_factor",
-        "",
+        Unit::None,
         "flatness cone = this x mean dihedral angle of matched edges (2 = thesis)",
     ),
-    (
+    ParamDoc::new(
         "nvc_range",
-        "count",
+        Unit::Count,
         "limitation range in umbrella rings: 1 or 2 (thesis: 2)",
     ),
-    (
+    ParamDoc::new(
         "nvc_start",
-        "",
+        Unit::Choice,
         "C-06: NVC from the first update (first) or after plain UFM stagnates",
     ),
-    (
+    ParamDoc::new(
         "nvc_level",
-        "",
+        Unit::Choice,
         "C-05: NVC level in the key: top (thesis) or below-class (inside a class)",
     ),
-    (
+    ParamDoc::new(
         "reorder",
-        "",
+        Unit::Flag,
         "run on Morton-ordered points (locality; changes only A-02 tie order)",
     ),
-    (
+    ParamDoc::new(
         "genus",
-        "count",
+        Unit::Count,
         "known genus (metadata) for the delta_f diagnostic; none = not reported",
     ),
 ];
+
+impl Describe for super::Ufm {
+    const NAME: &'static str = super::NAME;
+    const SOURCE: &'static str = "seed 000 §1.1";
+    const SUMMARY: &'static str =
+        "Umbrella Facet Matching on the 3D Delaunay triangulation (Ma 2011 ch. 3)";
+    type Params = UfmParams;
+    const PARAMS: &'static [ParamDoc] = PARAM_DOCS;
+
+    fn from_params(params: UfmParams) -> Result<Self, MethodError> {
+        Self::new(params)
+    }
+}
