@@ -14,8 +14,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::aggregate::Group;
-use crate::cell::higher_is_better;
 use crate::error::{HarnessError, Result};
+use crate::metric_spec::higher_is_better;
 
 /// A tolerance: relative, absolute, or both (a change within either is no change).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -31,11 +31,12 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
-use crate::cell;
 use crate::error::{HarnessError, Result};
+pub use crate::inputs::DataSpec;
 use crate::key::{derive_seed, hash_value, hex_key};
 use crate::pipeline::{self, StepSpec};
 use crate::registry::{self, MethodEntry, MethodKind};
+use crate::{inputs, metric_spec};
 
 /// Seed indices: a count (`3` = 0, 1, 2) or an explicit list.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -238,19 +239,6 @@ pub struct ExperimentFile {
     /// Published figures.
     #[serde(default)]
     pub expect: Vec<Expect>,
-}
-
-/// The data a cell's input cloud is generated from (shared by every method of a cell).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DataSpec {
-    /// Shape spec.
-    pub shape: String,
-    /// Sampler spec.
-    pub sampler: String,
-    /// Number of points.
-    pub points: u64,
-    /// Perturbation settings (resolved scalars, sorted by key).
-    pub perturb: BTreeMap<String, Value>,
 }
 
 /// Everything a worker needs to run one cell. Its canonical JSON (minus labels) is hashed
@@ -468,12 +456,12 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
         return Err(HarnessError::input("seeds: need at least one seed index"));
     }
     let metrics = Value::Object(to_json(&file.metrics));
-    cell::validate_metric_options(&metrics)?;
+    metric_spec::validate_metric_options(&metrics)?;
 
     // Datasets x points.
     let mut datasets = Vec::new();
     for (i, d) in file.datasets.iter().enumerate() {
-        cell::validate_data(&d.shape, &d.sampler)
+        inputs::validate_data(&d.shape, &d.sampler)
             .map_err(|e| HarnessError::input(format!("datasets[{i}]: {e}")))?;
         let points: Vec<u64> = match &d.points {
             toml::Value::Integer(n) => vec![*n as u64],
@@ -526,7 +514,7 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
             None => None,
         };
         for k in m.keys() {
-            cell::validate_perturb_key(k)
+            inputs::validate_perturb_key(k)
                 .map_err(|e| HarnessError::input(format!("perturbations[{i}]: {e}")))?;
         }
         let (combos, swept) = expand_table(&m);
@@ -548,7 +536,7 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
                 (None, false) => parts.join(" "),
             };
             let map: BTreeMap<String, Value> = c.into_iter().collect();
-            cell::validate_perturb_values(&map)
+            inputs::validate_perturb_values(&map)
                 .map_err(|e| HarnessError::input(format!("perturbations[{i}]: {e}")))?;
             perturbs.push((label, map));
         }

@@ -10,13 +10,17 @@
 pub mod aggregate;
 pub mod cell;
 pub mod compare;
+pub mod entry;
 pub mod error;
 pub mod experiment;
+pub mod inputs;
 pub mod key;
 pub mod methods;
+pub mod metric_spec;
 pub mod oneshot;
 pub mod pipeline;
 pub mod plots;
+pub mod progress;
 pub mod provenance;
 pub mod registry;
 pub mod render;

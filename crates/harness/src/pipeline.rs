@@ -16,8 +16,8 @@ use reconbench_synth::{NO_FEATURE, Shape};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::cell::Generated;
 use crate::error::{HarnessError, Result};
+use crate::inputs::Generated;
 use crate::key::{derive_seed, fnv1a64};
 use crate::registry::{self, Built, MethodEntry, MethodEnv, MethodKind, Needs};
 

@@ -25,10 +25,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{HarnessError, Result};
 use crate::experiment::{Cell, Experiment, shard_cells};
+use crate::progress::PROGRESS_PREFIX;
 use crate::provenance::{Provenance, rss_mib};
 use crate::registry::MethodKind;
 use crate::store::{Row, Status, Store, dedupe_sorted, read_rows, write_rows};
-use crate::worker::{PANIC_PREFIX, PROGRESS_PREFIX, REPLY_PREFIX, RenderRequest, Reply, Request};
+use crate::worker::{PANIC_PREFIX, REPLY_PREFIX, RenderRequest, Reply, Request};
 
 /// How to run an experiment.
 #[derive(Debug, Clone)]

@@ -8,7 +8,7 @@
 use std::fmt::Write as _;
 
 use crate::aggregate::{Group, Stat};
-use crate::cell::{default_metrics, higher_is_better};
+use crate::metric_spec::{default_metrics, higher_is_better};
 use crate::registry::MethodKind;
 
 /// Column of method time (from `cost`).

@@ -7,7 +7,7 @@ use reconbench_filters::StatisticalOutliers;
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
 use reconbench_recon::{PriorityFront, Ufm, UfmMesh};
 
-use crate::registry::{MethodEntry, features, filter, normals, reconstruct};
+use crate::entry::{MethodEntry, features, filter, normals, reconstruct};
 
 /// Every algorithm method, in `list` order.
 pub fn entries() -> Vec<MethodEntry> {

@@ -12,7 +12,7 @@ use reconbench_geom::method::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::registry::{Built, MethodEntry, MethodKind, Needs, ParamDoc, Unit, custom};
+use crate::entry::{Built, MethodEntry, MethodKind, Needs, ParamDoc, Unit, custom};
 
 /// No parameters.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

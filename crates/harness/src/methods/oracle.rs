@@ -20,7 +20,7 @@ use reconbench_geom::method::{
 use reconbench_synth::Shape;
 use serde::{Deserialize, Serialize};
 
-use crate::registry::{
+use crate::entry::{
     Built, GroundTruth, MethodEntry, MethodEnv, MethodKind, ParamDoc, Unit, custom,
 };
 
