@@ -5,7 +5,8 @@
 
 use std::time::Instant;
 
-use reconbench_delaunay::{Delaunay, samples};
+use reconbench_delaunay::Delaunay;
+use reconbench_testkit::points as samples;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

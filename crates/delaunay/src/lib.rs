@@ -43,7 +43,6 @@ mod exact_int;
 mod point;
 mod predicates;
 mod queries;
-pub mod samples;
 mod sort;
 mod validate;
 

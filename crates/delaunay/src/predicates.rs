@@ -449,7 +449,7 @@ mod tests {
     #[test]
     fn robust_insphere_agrees_with_expansions() {
         let mut rng = crate::sort::SplitMix(42);
-        let sphere = crate::samples::integer_sphere(1105);
+        let sphere = reconbench_testkit::points::integer_sphere(1105);
         let pts: Vec<P3> = sphere.iter().map(|p| p.to_array()).collect();
         // Calibrate the sign on a clearly inside point.
         let t = [

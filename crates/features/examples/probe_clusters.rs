@@ -4,8 +4,7 @@
 //!
 //! `cargo run --release -p reconbench-features --example probe_clusters`
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use reconbench_testkit::feature_fixtures as common;
 
 use glam::DVec3;
 use reconbench_features::AverageLinkage;

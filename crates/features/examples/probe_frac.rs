@@ -5,8 +5,7 @@
 //!
 //! `cargo run --release -p reconbench-features --example probe_frac`
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use reconbench_testkit::feature_fixtures as common;
 
 use glam::DVec3;
 use rand::{RngExt, SeedableRng};

@@ -3,8 +3,7 @@
 //!
 //! `cargo run --release -p reconbench-features --example probe_noise`
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use reconbench_testkit::feature_fixtures as common;
 
 use reconbench_features::{GaussMap, GaussMapAdaptive, GaussMapAdaptiveParams, GaussMapParams};
 use reconbench_geom::PointCloud;

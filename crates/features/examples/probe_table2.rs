@@ -5,8 +5,7 @@
 //!
 //! `cargo run --release -p reconbench-features --example probe_table2`
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use reconbench_testkit::feature_fixtures as common;
 
 use reconbench_features::{GaussMapParams, GaussWorkspace, Stage};
 use reconbench_geom::spatial::PointIndex;

@@ -3,8 +3,7 @@
 //!
 //! `cargo run --release -p reconbench-features --example probe_wedge [ANGLE] [K0]`
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use reconbench_testkit::feature_fixtures as common;
 
 use reconbench_features::{GaussMapAdaptive, GaussMapAdaptiveParams};
 use reconbench_geom::method::{FeatureClass, FeatureDetector, RunCtx};

@@ -13,8 +13,8 @@ use rand_chacha::ChaCha8Rng;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Diagnostic, Reconstructor, RunCtx};
 use reconbench_geom::topology::analyze;
-use reconbench_recon::samples::Surface;
 use reconbench_recon::{PriorityFront, PriorityFrontParams};
+use reconbench_testkit::surfaces::Surface;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -52,7 +52,7 @@ fn main() {
         .ok()
         .and_then(|s| s.parse::<f64>().ok())
     {
-        let out = reconbench_recon::samples::uniform_outliers(
+        let out = reconbench_testkit::surfaces::uniform_outliers(
             &pts,
             (f * n_clean as f64) as usize,
             &mut rng,

@@ -8,7 +8,7 @@
 //! mesh edges), `bevel_faces` (faces with corners on two different box faces, edge
 //! samples not counted: the edge cut off) and the open (hole or unreferenced) vertices
 //! on an edge / within 2h of one / farther. Generator and measures:
-//! `tests/support/box_edges.rs`.
+//! `reconbench_testkit::box_edges`.
 //!
 //! `EDGE_DENSE=k` (default 2): edge spacing `h / k`. `MARGIN=` (default 0.25): face
 //! samples keep this share of a cell from the cell border. `SEED=` (default 1).
@@ -17,8 +17,7 @@
 //! 0.06 '{"max_fold": 90, "escapes": 20}' '{"max_fold": 90, "escapes": 20, "nvc":
 //! "flat-only"}'`
 
-#[path = "../tests/support/box_edges.rs"]
-mod box_edges;
+use reconbench_testkit::box_edges;
 
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Diagnostic, Reconstructor, RunCtx};

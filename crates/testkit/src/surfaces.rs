@@ -1,8 +1,5 @@
-//! Small deterministic point-set generators for this crate's tests, benches and examples
-//! (sphere, torus, open sheet, two parallel sheets, uniform outliers, blue noise).
-//!
-//! These are stand-ins until `reconbench-synth` provides its shapes and samplers; they
-//! are not methods and the harness does not use them.
+//! Small deterministic point-set generators for the reconstruction tests, benches and
+//! probes (sphere, torus, open sheet, two parallel sheets, uniform outliers, blue noise).
 
 use std::collections::HashMap;
 use std::f64::consts::TAU;

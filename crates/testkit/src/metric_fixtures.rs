@@ -1,5 +1,5 @@
-//! Test-only helpers: a tiny analytic sphere implementing `Shape`, and small meshes.
-#![allow(dead_code)]
+//! Fixtures of the metric tests and benches: a tiny analytic sphere implementing
+//! `Shape`, small meshes and mesh edits, a brute-force distance.
 
 use std::f64::consts::PI;
 
@@ -72,11 +72,7 @@ impl Shape for TestSphere {
         0
     }
     fn reference_mesh(&self, resolution: usize) -> TriMesh {
-        let m = reconbench_geom::topology::examples::uv_sphere(
-            resolution.max(2),
-            2 * resolution.max(2),
-            self.radius,
-        );
+        let m = crate::meshes::uv_sphere(resolution.max(2), 2 * resolution.max(2), self.radius);
         translate(&m, self.center)
     }
 }
@@ -176,6 +172,7 @@ pub fn brute_distance(mesh: &TriMesh, p: DVec3) -> f64 {
 }
 
 /// A small deterministic generator for test data.
+#[derive(Debug)]
 pub struct Lcg(pub u64);
 
 impl Lcg {

@@ -1,6 +1,5 @@
-//! Test clouds with exact ground truth (until reconbench-synth lands) and point-labelling
+//! Feature-detection fixtures: test clouds with exact ground truth and point-labelling
 //! scores.
-#![allow(dead_code)]
 
 use glam::DVec3;
 use rand::{RngExt, SeedableRng};
@@ -9,6 +8,7 @@ use reconbench_geom::PointCloud;
 use reconbench_geom::method::FeatureClass;
 
 /// A test cloud with its sharp feature segments and corners.
+#[derive(Debug)]
 pub struct Truth {
     pub points: Vec<DVec3>,
     pub edges: Vec<(DVec3, DVec3)>,

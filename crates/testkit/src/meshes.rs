@@ -1,4 +1,4 @@
-//! Small meshes with known topology, for tests here and in other crates.
+//! Small meshes with known topology.
 //!
 //! All closed examples are consistently oriented with outward normals (positive signed
 //! volume). Resolutions below the minimum that gives a valid surface are raised to it
@@ -19,7 +19,7 @@ use std::f64::consts::{PI, TAU};
 
 use glam::DVec3;
 
-use crate::mesh::TriMesh;
+use reconbench_geom::TriMesh;
 
 /// Builds the mesh, or an empty one if a parameter made a coordinate non-finite.
 fn build(vertices: Vec<DVec3>, faces: Vec<[u32; 3]>) -> TriMesh {

@@ -1,13 +1,13 @@
 //! A box `[-1, 1]^3` sampled like the thesis's CAD meshes (chapter 5): jittered-grid
 //! samples on the six faces plus samples exactly on the 12 edges and the 8 corners,
-//! and the measures of whether a mesh keeps the box's edges. Shared by
-//! `tests/ufm.rs` and `examples/ufm_box_edges.rs` (`#[path]` module).
+//! and the measures of whether a mesh keeps the box's edges.
 
 use std::collections::{HashMap, HashSet};
 
 use glam::DVec3;
 
 /// The sampled box.
+#[derive(Debug)]
 pub struct BoxSamples {
     /// Points.
     pub pts: Vec<DVec3>,

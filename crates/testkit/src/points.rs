@@ -1,9 +1,23 @@
-//! Deterministic point sets used by the tests, benchmarks and examples (uniform, torus
-//! surface, sphere, grids, cube surface). Each generator is seeded and self-contained.
+//! Deterministic point sets for the Delaunay tests, benchmarks and probes (uniform,
+//! torus surface, sphere, grids, cube surface). Each generator is seeded and
+//! self-contained.
 
 use glam::DVec3;
 
-use crate::sort::SplitMix;
+/// SplitMix64, the generator of the Delaunay crate's insertion order: the point sets
+/// below are the ones its tests were written against.
+#[derive(Clone, Debug)]
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+}
 
 fn unit(rng: &mut SplitMix) -> f64 {
     (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
