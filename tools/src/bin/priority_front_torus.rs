@@ -1,6 +1,6 @@
 //! Prints the triangle rate of `priority-front` on a blue-noise torus.
 //!
-//! `cargo run --release -p reconbench-recon --example priority_front_torus -- [points]
+//! `cargo run --release -p reconbench-tools --bin priority_front_torus -- [points]
 //! [threads] [shape]` with shape `torus` (default), `sphere`, `sheet` or `two-sheets`.
 //! Environment: `RECON_PARAMS` (JSON parameters), `RECON_OUTLIERS` (fraction of uniform
 //! outliers), `RECON_SAMPLE_SEED` / `RECON_CTX_SEED` (default 7 / 1), `RECON_DUMP`

@@ -1,7 +1,7 @@
 //! Diagnostic probe (not part of the API): `gauss-map-adaptive` on a noisy random box:
 //! first-pass and final precision (at 2 grid-equivalent spacings) against the noise.
 //!
-//! `cargo run --release -p reconbench-features --example probe_noise`
+//! `cargo run --release -p reconbench-tools --bin probe_noise`
 
 use reconbench_testkit::feature_fixtures as common;
 

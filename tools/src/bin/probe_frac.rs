@@ -3,7 +3,7 @@
 //! random box, a Fibonacci sphere and a valence-4 apex (z = -(|x| + |y|)), grid and
 //! random. Prints the evidence table of docs/methods/features.md.
 //!
-//! `cargo run --release -p reconbench-features --example probe_frac`
+//! `cargo run --release -p reconbench-tools --bin probe_frac`
 
 use reconbench_testkit::feature_fixtures as common;
 

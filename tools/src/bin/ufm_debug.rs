@@ -1,5 +1,5 @@
 //! Prints the local state of unmatched umbrellas after a UFM run (debugging aid).
-//! `cargo run --release -p reconbench-recon --example ufm_debug -- SHAPE N SAMPLER [COUNT]`
+//! `cargo run --release -p reconbench-tools --bin ufm_debug -- SHAPE N SAMPLER [COUNT]`
 
 use reconbench_geom::method::RunCtx;
 use reconbench_recon::ufm::engine;

@@ -1,7 +1,7 @@
 //! Phase split of `pf` (tree build, Morton order, kNN, fit) on N random torus points, for
 //! the performance notes in docs/methods/normals.md.
 //!
-//! `cargo run --release -p reconbench-normals --example pf_phases -- [N] [k] [reps] [mode]`
+//! `cargo run --release -p reconbench-tools --bin pf_phases -- [N] [k] [reps] [mode]`
 //!
 //! `mode` 0 (default) prints the phase split; 1 runs `pf` only and 2 runs nothing after
 //! generating the points (for callgrind: the difference of the two instruction counts

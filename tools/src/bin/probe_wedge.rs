@@ -1,7 +1,7 @@
 //! Diagnostic probe (not part of the API): `gauss-map-adaptive` on a grid wedge with
 //! small k0 (the thesis's §3.7.1 setting), printing the refinement's diagnostics.
 //!
-//! `cargo run --release -p reconbench-features --example probe_wedge [ANGLE] [K0]`
+//! `cargo run --release -p reconbench-tools --bin probe_wedge [ANGLE] [K0]`
 
 use reconbench_testkit::feature_fixtures as common;
 

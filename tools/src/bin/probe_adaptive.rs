@@ -3,7 +3,7 @@
 //! features.md, "Adaptive on curved shapes"). Prints first-pass share, survivors,
 //! re-tests and phase times.
 //!
-//! `cargo run --release -p reconbench-features --example probe_adaptive [N ...]`
+//! `cargo run --release -p reconbench-tools --bin probe_adaptive [N ...]`
 
 use glam::DVec3;
 use rand::{RngExt, SeedableRng};

@@ -13,7 +13,7 @@
 //! `EDGE_DENSE=k` (default 2): edge spacing `h / k`. `MARGIN=` (default 0.25): face
 //! samples keep this share of a cell from the cell border. `SEED=` (default 1).
 //!
-//! `EDGE_DENSE=2 cargo run --release -p reconbench-recon --example ufm_box_edges --
+//! `EDGE_DENSE=2 cargo run --release -p reconbench-tools --bin ufm_box_edges --
 //! 0.06 '{"max_fold": 90, "escapes": 20}' '{"max_fold": 90, "escapes": 20, "nvc":
 //! "flat-only"}'`
 

@@ -1,4 +1,4 @@
-//! Timing of one construction: `cargo run --release -p reconbench-delaunay --example
+//! Timing of one construction: `cargo run --release -p reconbench-tools --bin
 //! dt_bench -- <kind> <n> [--validate]` with kind in uniform, torus, sphere, isphere,
 //! grid, cubegrid, intcube, cubegrid2; `--queries` times the facet/incidence/Gabriel
 //! queries.

@@ -4,7 +4,7 @@
 //! (a) full matrix with the `atan2` small-angle branch + cut (the previous version),
 //! (b) full matrix with the series `asin` branch + cut, (c) `count_big` (components).
 //!
-//! `cargo run --release -p reconbench-features --example probe_speed`
+//! `cargo run --release -p reconbench-tools --bin probe_speed`
 
 use std::time::Instant;
 

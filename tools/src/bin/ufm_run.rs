@@ -1,6 +1,6 @@
 //! Runs `ufm` on a synthetic shape and prints the diagnostics and the time split.
 //!
-//! `cargo run --release -p reconbench-recon --example ufm_run -- SHAPE N [SAMPLER] [PERTURB]`
+//! `cargo run --release -p reconbench-tools --bin ufm_run -- SHAPE N [SAMPLER] [PERTURB]`
 //! e.g. `-- torus-knot 50000 blue-noise`, `-- torus 3600 grid`,
 //! `-- sphere 20000 uniform ball:radius=0.3,rel=spacing`.
 

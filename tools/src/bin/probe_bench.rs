@@ -2,8 +2,8 @@
 //! the bench's 100k-point random box; run under `/usr/bin/time` to get CPU seconds,
 //! which are less sensitive to a shared machine's load than wall time.
 //!
-//! `cargo build --release -p reconbench-features --example probe_bench &&
-//!  /usr/bin/time -f "%U s user %e s wall" target/release/examples/probe_bench`
+//! `cargo build --release -p reconbench-tools --bin probe_bench &&
+//!  /usr/bin/time -f "%U s user %e s wall" target/release/probe_bench`
 
 use glam::DVec3;
 use rand::{RngExt, SeedableRng};

@@ -2,7 +2,7 @@
 //! points of the grid box and the random box, to study the small-cluster threshold
 //! (docs/methods/features.md, W-06).
 //!
-//! `cargo run --release -p reconbench-features --example probe_clusters`
+//! `cargo run --release -p reconbench-tools --bin probe_clusters`
 
 use reconbench_testkit::feature_fixtures as common;
 

@@ -3,7 +3,7 @@
 //! and 1.2 % of R at the thesis's spacing 0.25, R = 8.5), split by point class (on an
 //! edge, one row off, interior), for the first-pass settings and larger sigma.
 //!
-//! `cargo run --release -p reconbench-features --example probe_table2`
+//! `cargo run --release -p reconbench-tools --bin probe_table2`
 
 use reconbench_testkit::feature_fixtures as common;
 
