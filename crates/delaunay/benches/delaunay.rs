@@ -1,7 +1,8 @@
 //! Construction benchmarks: `cargo bench -p reconbench-delaunay`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use reconbench_delaunay::{Delaunay, samples};
+use reconbench_delaunay::Delaunay;
+use reconbench_testkit::points as samples;
 
 fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("delaunay");

@@ -12,7 +12,8 @@
 //! * Vertices and neighbours of a tetrahedron share one 32-byte aligned record, so a
 //!   tetrahedron costs one cache line access.
 
-use crate::predicates::{P3, insphere, orient3d};
+use crate::point::P3;
+use crate::predicates::{insphere, orient3d};
 use crate::sort::SplitMix;
 
 /// The infinite vertex.

@@ -40,9 +40,9 @@
 mod build;
 mod exact;
 mod exact_int;
+mod point;
 mod predicates;
 mod queries;
-pub mod samples;
 mod sort;
 mod validate;
 
@@ -55,7 +55,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use build::{Builder, FREE, INF, Tet};
-use predicates::{P3, orient3d};
+use point::P3;
+use predicates::orient3d;
 
 pub use queries::Facet;
 

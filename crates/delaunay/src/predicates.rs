@@ -20,8 +20,7 @@
 use robust::Coord3D;
 
 use crate::exact::Expansion;
-
-pub(crate) type P3 = [f64; 3];
+use crate::point::P3;
 
 #[inline]
 fn c3(p: &P3) -> Coord3D<f64> {
@@ -450,7 +449,7 @@ mod tests {
     #[test]
     fn robust_insphere_agrees_with_expansions() {
         let mut rng = crate::sort::SplitMix(42);
-        let sphere = crate::samples::integer_sphere(1105);
+        let sphere = reconbench_testkit::points::integer_sphere(1105);
         let pts: Vec<P3> = sphere.iter().map(|p| p.to_array()).collect();
         // Calibrate the sign on a clearly inside point.
         let t = [
@@ -555,5 +554,44 @@ mod tests {
             &sh(c),
             &sh([2.0, 2.0, 0.0])
         ));
+    }
+
+    #[test]
+    fn integer_predicates_agree_with_robust() {
+        let mut rng = crate::sort::SplitMix(7);
+        let mut zeros = 0;
+        for k in 0..20000 {
+            let scale = [1.0, 0.125, 1024.0, 1.0 / 80.0][k % 4];
+            let r = [3usize, 9, 1000][k % 3];
+            let mut p = [[0.0f64; 3]; 5];
+            for q in &mut p {
+                for c in q.iter_mut() {
+                    *c = (rng.below(r) as f64 - (r / 2) as f64) * scale;
+                }
+            }
+            if let Some(s) = crate::exact_int::orient3d(&p[0], &p[1], &p[2], &p[3]) {
+                assert_eq!(s, orient3d_exact(&p[0], &p[1], &p[2], &p[3]));
+                if s < 0 {
+                    p.swap(0, 1);
+                }
+                if s != 0 {
+                    let t = crate::exact_int::insphere(&p[0], &p[1], &p[2], &p[3], &p[4]).unwrap();
+                    let want = insphere_exact(&p[0], &p[1], &p[2], &p[3], &p[4]);
+                    assert_eq!(t, want, "{p:?}");
+                    zeros += usize::from(t == 0);
+                }
+            }
+        }
+        assert!(zeros > 100);
+        // Coordinates spanning too many bits are declined.
+        assert!(
+            crate::exact_int::orient3d(
+                &[1.0, 0.0, 0.0],
+                &[1e-30, 0.0, 0.0],
+                &[0.0; 3],
+                &[0.0, 0.0, 1.0]
+            )
+            .is_none()
+        );
     }
 }

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::predicates::P3;
+use crate::point::P3;
 
 /// Bits per axis of the Hilbert grid (3 × 21 = 63-bit keys).
 const BITS: u32 = 21;

@@ -3,7 +3,8 @@
 use std::collections::{BTreeSet, HashSet};
 
 use glam::DVec3;
-use reconbench_delaunay::{Delaunay, DelaunayStats, NO_TET, samples};
+use reconbench_delaunay::{Delaunay, DelaunayStats, NO_TET};
+use reconbench_testkit::points as samples;
 
 fn facets_are_consistent(dt: &Delaunay) {
     let facets = dt.facets();

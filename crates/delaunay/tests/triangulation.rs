@@ -7,7 +7,8 @@ use glam::DVec3;
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use reconbench_delaunay::{Delaunay, DelaunayError, DelaunayOptions, INFINITE, NO_TET, samples};
+use reconbench_delaunay::{Delaunay, DelaunayError, DelaunayOptions, INFINITE, NO_TET};
+use reconbench_testkit::points as samples;
 
 /// Sorted vertex quadruples of the finite tetrahedra, as input indices.
 fn tet_set(dt: &Delaunay) -> BTreeSet<[u32; 4]> {

@@ -2,7 +2,7 @@
 //! (no memo, no parallel batches, no component pruning), the isolated rule without
 //! cascades, and a valence-4 corner.
 
-mod common;
+use reconbench_testkit::feature_fixtures as common;
 
 use glam::DVec3;
 use reconbench_features::{

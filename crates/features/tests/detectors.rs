@@ -1,6 +1,6 @@
 //! Behaviour of the three detectors on clouds with exact ground truth.
 
-mod common;
+use reconbench_testkit::feature_fixtures as common;
 
 use std::time::Duration;
 

@@ -16,7 +16,8 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use reconbench_geom::DVec3;
 use reconbench_geom::spatial::{MeshBvh, PointIndex};
-use reconbench_geom::topology::{MeshTopology, analyze, examples};
+use reconbench_geom::topology::{MeshTopology, analyze};
+use reconbench_testkit::meshes as examples;
 
 fn env_size(name: &str, default: usize) -> usize {
     std::env::var(name)

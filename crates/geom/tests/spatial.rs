@@ -4,8 +4,8 @@ use reconbench_geom::spatial::{
     MeshBvh, Neighbor, PointIndex, closest_point_on_segment, closest_point_on_triangle,
     closest_point_on_triangle_bary, knn_self_map, knn_self_table, mean_spacing,
 };
-use reconbench_geom::topology::examples;
 use reconbench_geom::{DVec3, GeomError, TriMesh};
+use reconbench_testkit::meshes as examples;
 
 /// SplitMix64: a tiny deterministic generator (no rand dependency needed).
 struct Rng(u64);

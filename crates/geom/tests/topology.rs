@@ -1,9 +1,10 @@
 //! Topology analysis on meshes with known answers.
 
 use reconbench_geom::topology::{
-    MeshTopology, NO_EDGE, TopologyReport, analyze, examples, orient_consistently,
+    MeshTopology, NO_EDGE, TopologyReport, analyze, orient_consistently,
 };
 use reconbench_geom::{DVec3, TriMesh};
+use reconbench_testkit::meshes as examples;
 
 /// Signed volume (positive for outward-oriented closed meshes).
 fn signed_volume(m: &TriMesh) -> f64 {

@@ -6,19 +6,18 @@
 //! Run with `cargo bench -p reconbench-metrics --bench distance`. Prints a phase
 //! breakdown once, then lets criterion time the whole `eval_distance` call.
 
-#[path = "../tests/common/mod.rs"]
-mod common;
+use reconbench_testkit::metric_fixtures as common;
 
 use std::time::{Duration, Instant};
 
 use common::TestSphere;
 use criterion::{Criterion, criterion_group, criterion_main};
-use reconbench_geom::topology::examples::uv_sphere;
 use reconbench_geom::{MeshBvh, TriMesh};
 use reconbench_metrics::distance::{DistanceOptions, eval_distance};
 use reconbench_metrics::eval::{MeshEvalOptions, eval_mesh};
 use reconbench_metrics::sampling::sample_mesh;
 use reconbench_metrics::{Reference, Report, cpu_time_seconds};
+use reconbench_testkit::meshes::uv_sphere;
 
 const SAMPLES: usize = 1_000_000;
 

@@ -1,14 +1,13 @@
 //! Each metric against a number known in closed form (issue 5), plus brute-force
 //! cross-checks on small inputs.
 
-mod common;
+use reconbench_testkit::metric_fixtures as common;
 
 use common::{
     Lcg, TestSphere, brute_distance, concat, icosahedron, translate, unweld, without_face,
 };
 use glam::{DQuat, DVec3};
 use reconbench_geom::method::PhaseTimer;
-use reconbench_geom::topology::examples::{cube, square_grid, torus_grid, uv_sphere};
 use reconbench_geom::{Channel, PointCloud, TriMesh};
 use reconbench_metrics::distance::{DistanceOptions, Sides, eval_distance};
 use reconbench_metrics::eval::{MeshEvalOptions, eval_cloud_features, eval_mesh};
@@ -22,6 +21,7 @@ use reconbench_metrics::topology::{
 };
 use reconbench_metrics::{CostReport, Reference, Report, peak_rss_bytes};
 use reconbench_synth::FeatureCurve;
+use reconbench_testkit::meshes::{cube, square_grid, torus_grid, uv_sphere};
 
 fn small_opts() -> DistanceOptions {
     DistanceOptions {

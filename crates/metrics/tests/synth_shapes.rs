@@ -55,7 +55,7 @@ fn reference_from_a_command_line_argument() {
     assert_eq!(r.genus(), Some(0));
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cube.ply");
-    reconbench_geom::io::write_mesh(&path, &reconbench_geom::topology::examples::cube()).unwrap();
+    reconbench_geom::io::write_mesh(&path, &reconbench_testkit::meshes::cube()).unwrap();
     let r = Reference::from_arg(path.to_str().unwrap()).unwrap();
     assert_eq!(
         (r.n_faces(), r.genus(), r.is_closed()),

@@ -9,8 +9,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Reconstructor, RunCtx};
-use reconbench_recon::samples::Surface;
 use reconbench_recon::{PriorityFront, PriorityFrontParams};
+use reconbench_testkit::surfaces::Surface;
 
 fn env_usize(k: &str, d: usize) -> usize {
     std::env::var(k)

@@ -7,11 +7,9 @@
 //!   normal estimator (ch. 4, Algorithm B).
 //!
 //! Every method implements [`reconbench_geom::method::Reconstructor`] and has a serde
-//! `Params` struct with documented defaults. [`samples`] holds small point-set
-//! generators for this crate's tests and benches.
+//! `Params` struct with documented defaults.
 
 pub mod priority_front;
-pub mod samples;
 pub mod ufm;
 
 pub use priority_front::{PriorityFront, PriorityFrontParams};

@@ -10,8 +10,8 @@ use reconbench_geom::method::{MethodError, Reconstruction, Reconstructor, RunCtx
 use reconbench_geom::topology::{TopologyReport, analyze};
 use reconbench_geom::{MeshBvh, PointCloud};
 use reconbench_recon::priority_front::NAME;
-use reconbench_recon::samples::{Surface, uniform_outliers};
 use reconbench_recon::{PriorityFront, PriorityFrontParams};
+use reconbench_testkit::surfaces::{Surface, uniform_outliers};
 
 /// Parameters used for the closed-surface tests: the defaults (ASSUMPTION A12 off by
 /// default since issue 8; see docs/methods/priority_front.md).

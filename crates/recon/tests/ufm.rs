@@ -873,8 +873,7 @@ fn bad_nvc_parameters_are_errors() {
     assert!(matches!(e, Err(MethodError::InvalidInput(_))), "{e:?}");
 }
 
-#[path = "support/box_edges.rs"]
-mod box_edges;
+use reconbench_testkit::box_edges;
 
 /// The sharp-feature claim of chapter 5 on a box sampled like a CAD mesh (edge samples
 /// at half the face spacing): with the fold repair and escapes, restricting NVC cones

@@ -12,8 +12,6 @@
 //! * [`analyze`] produces a [`TopologyReport`] (Euler characteristic, components, boundary
 //!   loops, non-manifold elements, orientability, watertightness, genus, defects).
 //! * [`orient_consistently`] makes face orientations agree across manifold edges.
-//! * [`examples`] builds small meshes with known topology for tests (this crate's and
-//!   others').
 //!
 //! # Conventions
 //!
@@ -32,8 +30,6 @@
 //! * Orientation is only defined across manifold edges (exactly two faces). Orientability
 //!   and consistency are judged over those; a non-manifold edge neither propagates nor
 //!   violates orientation.
-
-pub mod examples;
 
 use glam::DVec3;
 use rayon::prelude::*;

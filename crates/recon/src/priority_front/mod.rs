@@ -97,39 +97,14 @@ impl Reconstructor for PriorityFront {
         let p = &self.params;
         p.validate()?;
         let n = cloud.len();
-        if n < 3 {
-            return Err(MethodError::InvalidInput(format!(
-                "priority-front needs at least 3 points, got {n}"
-            )));
-        }
-        if n >= u32::MAX as usize {
-            return Err(MethodError::InvalidInput(format!(
-                "{n} points exceed u32 range"
-            )));
-        }
-        if let Some(s) = p.seed_point
-            && s as usize >= n
-        {
-            return Err(MethodError::InvalidParameter {
-                name: "seed_point".into(),
-                message: format!("index {s} out of range for {n} points"),
-            });
-        }
+        check_input(p, n)?;
         let t_start = Instant::now();
         let input = cloud.positions();
         let mut rng = ChaCha8Rng::seed_from_u64(ctx.seed);
         let mut diag = Diagnostics::new();
 
         // P1-P3: duplicates, rho, R.
-        let (dup, rho) = ctx.phase("density", || {
-            let (g0, ord0) = search_grid(input);
-            let dup = duplicates(&g0, &ord0, input);
-            let p0: Vec<DVec3> = ord0.iter().map(|&i| input[i as usize]).collect();
-            let dup0: Vec<bool> = ord0.iter().map(|&i| dup[i as usize]).collect();
-            let eligible = |i: usize| !dup0[i];
-            let rho = mean_nn(&g0, &p0, &eligible, p.rho_sample, &mut rng);
-            (dup, rho)
-        });
+        let (dup, rho) = density_phase(input, p, &mut rng, ctx);
         let n_dup = dup.iter().filter(|&&d| d).count();
         num(&mut diag, "duplicates", n_dup as f64);
         let Some(rho) = rho.filter(|_| n - n_dup >= 3) else {
@@ -152,151 +127,29 @@ impl Reconstructor for PriorityFront {
         num(&mut diag, "radius", r0);
 
         // P4: the hash grid, cell h = grid_cell * R (ASSUMPTION A2: h = R).
-        let (grid, order, pts) = ctx.phase("grid", || {
-            let (grid, order) = Grid::build(input, r0 * p.grid_cell);
-            let pts: Vec<DVec3> = order.iter().map(|&i| input[i as usize]).collect();
-            (grid, order, pts)
-        });
-        let mut inv = vec![0u32; n];
-        for (g, &i) in order.iter().enumerate() {
-            inv[i as usize] = g as u32;
-        }
-        let refused0: Vec<bool> = order.iter().map(|&i| dup[i as usize]).collect();
-        let centroid = {
-            let (s, c) = pts
-                .iter()
-                .zip(&refused0)
-                .filter(|(_, d)| !**d)
-                .fold((DVec3::ZERO, 0usize), |(s, c), (q, _)| (s + *q, c + 1));
-            s / c.max(1) as f64
-        };
-        let cfg = Cfg {
-            r: r0,
-            cos_alpha: p.alpha_max_deg.to_radians().cos(),
-            cos_beta: p.beta_max_deg.to_radians().cos(),
-            w: [p.w1, p.w2, p.w3],
-            seg_dist: p.score_distance == ScoreDistance::Segment,
-            apex_rule: p.apex_angle_rule,
-            link_prev: p.link_prev,
-            glue_mirror: p.glue_mirror,
-            cross_factor: p.cross_radius,
-            reject_free_inside: p.reject_free_inside,
-            front_inside_check: p.front_inside_check,
-            fill_any_angle: p.fill_any_angle,
-            sector_check: p.sector_check,
-            revisit_passes: p.revisit_passes,
-            sin_elev: if p.free_elevation_max_deg >= 90.0 {
-                1.0
-            } else {
-                p.free_elevation_max_deg.to_radians().sin()
-            },
-            height_r: p.free_height_max / p.k,
-            support_k: p.support_neighbours,
-            support_tol: p.support_tolerance * rho,
-            support_radius: p.support_radius,
-            support_share: p.support_share,
-        };
+        let lay = grid_phase(input, &dup, r0 * p.grid_cell, ctx);
+        let cfg = mesher_cfg(p, r0, rho);
         let dcfg = DomainCfg {
             params: p,
             r0,
-            centroid,
-            first_centre: p.seed_point.map(|s| inv[s as usize]),
+            centroid: lay.centroid,
+            first_centre: p.seed_point.map(|s| lay.inv[s as usize]),
             seeds_before: 0,
         };
 
         // M0-M8.
         let t_grow = Instant::now();
         let grown = if p.threads <= 1 {
-            let mut m = Mesher::new(&pts, &grid, cfg, &refused0);
-            m.run_domain(&dcfg, &mut rng, ctx)?;
-            m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
-            end_phase(ctx, "grow", t_grow);
-            Grown {
-                loops: m.loops(),
-                tris: std::mem::take(&mut m.tris),
-                state: std::mem::take(&mut m.state),
-                stats: m.stats.clone(),
-            }
+            grow_serial(&lay, cfg, &dcfg, &mut rng, ctx, t_grow)?
         } else {
-            let outs = parallel::grow_slabs(
-                &pts,
-                &refused0,
-                grid.lat.h(),
-                &cfg,
-                &dcfg,
-                p.threads,
-                ctx.seed,
-                ctx,
-            )?;
-            end_phase(ctx, "grow", t_grow);
-            let t_st = Instant::now();
-            let mut m = Mesher::new(&pts, &grid, cfg, &refused0);
-            parallel::stitch_import(&mut m, &outs, p.stitch_one_sided);
-            // One-sided sweep of the bands (no revisits yet), then every front.
-            let passes = m.cfg.revisit_passes;
-            m.cfg.revisit_passes = 0;
-            m.grow(ctx)?;
-            m.cfg.revisit_passes = passes;
-            m.repush_all();
-            m.grow(ctx)?;
-            // Restarts over the whole cloud for what the slabs left.
-            m.restarts(&dcfg, &mut rng, ctx)?;
-            m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
-            if p.stitch_zip {
-                m.stats.holes_closed += m.zip_parallel_loops();
-            }
-            end_phase(ctx, "stitch", t_st);
-            Grown {
-                loops: m.loops(),
-                tris: std::mem::take(&mut m.tris),
-                state: std::mem::take(&mut m.state),
-                stats: m.stats.clone(),
-            }
+            let outs = grow_slabs_phase(&lay, &cfg, &dcfg, ctx, t_grow)?;
+            stitch_phase(&lay, cfg, &dcfg, &outs, &mut rng, ctx)?
         };
         let grow_secs = t_grow.elapsed().as_secs_f64();
 
         // M9: Free points become Refused; map back to input indices.
-        let (faces, refused) = ctx.phase("output", || {
-            let faces: Vec<[u32; 3]> = grown
-                .tris
-                .iter()
-                .map(|t| t.map(|g| order[g as usize]))
-                .collect();
-            let mut refused: Vec<u32> = (0..n)
-                .filter(|&g| grown.state[g] == FREE || grown.state[g] == REFUSED)
-                .map(|g| order[g])
-                .collect();
-            refused.sort_unstable();
-            (faces, refused)
-        });
-        let s = &grown.stats;
-        num(&mut diag, "seeds", s.seeds as f64);
-        num(&mut diag, "front_edges_processed", s.pops as f64);
-        num(&mut diag, "boundary_pops", s.boundary_pops as f64);
-        num(&mut diag, "joins", s.joins as f64);
-        num(&mut diag, "fills", s.fills as f64);
-        num(&mut diag, "links", (s.link_next + s.link_prev) as f64);
-        num(&mut diag, "link_next", s.link_next as f64);
-        num(&mut diag, "link_prev", s.link_prev as f64);
-        num(&mut diag, "glues", (s.glues + s.glue_mirrors) as f64);
-        num(&mut diag, "glue_mirrors", s.glue_mirrors as f64);
-        num(&mut diag, "glue_rejects", s.glue_rejects as f64);
-        num(&mut diag, "cross_rejects", s.cross_rejects as f64);
-        num(&mut diag, "threads", p.threads as f64);
-        num(&mut diag, "fail_rules", s.fail_rules as f64);
-        num(&mut diag, "sector_rejects", s.sector_rejects as f64);
-        num(&mut diag, "boundary_loops", grown.loops.len() as f64);
-        num(&mut diag, "holes_closed", s.holes_closed as f64);
-        diag.insert(
-            "boundary_loop_sizes".into(),
-            Diagnostic::Series(grown.loops.iter().map(|l| l.len() as f64).collect()),
-        );
-        let mut cents = Vec::with_capacity(grown.loops.len() * 3);
-        for l in &grown.loops {
-            let c = l.iter().map(|&v| pts[v as usize]).sum::<DVec3>() / l.len().max(1) as f64;
-            cents.extend([c.x, c.y, c.z]);
-        }
-        diag.insert("boundary_loop_centroids".into(), Diagnostic::Series(cents));
+        let (faces, refused) = output_phase(&grown, &lay.order, n, ctx);
+        record_stats(&mut diag, &grown, &lay.pts, p);
         num(
             &mut diag,
             "grow_triangles_per_second",
@@ -305,6 +158,263 @@ impl Reconstructor for PriorityFront {
         diag.insert("assumptions".into(), Diagnostic::Text(assumption_flags(p)));
         finish(input, faces, refused, diag, t_start, grow_secs)
     }
+}
+
+/// Rejects inputs the mesher cannot index: fewer than 3 points, more than the `u32`
+/// range, or a `seed_point` outside the cloud.
+fn check_input(p: &PriorityFrontParams, n: usize) -> Result<(), MethodError> {
+    if n < 3 {
+        return Err(MethodError::InvalidInput(format!(
+            "priority-front needs at least 3 points, got {n}"
+        )));
+    }
+    if n >= u32::MAX as usize {
+        return Err(MethodError::InvalidInput(format!(
+            "{n} points exceed u32 range"
+        )));
+    }
+    if let Some(s) = p.seed_point
+        && s as usize >= n
+    {
+        return Err(MethodError::InvalidParameter {
+            name: "seed_point".into(),
+            message: format!("index {s} out of range for {n} points"),
+        });
+    }
+    Ok(())
+}
+
+/// P1-P3 (timed as `density`): the duplicate flag of every input point and ρ, the mean
+/// nearest-neighbour distance over the distinct points (`None` when it is undefined).
+fn density_phase(
+    input: &[DVec3],
+    p: &PriorityFrontParams,
+    rng: &mut ChaCha8Rng,
+    ctx: &mut RunCtx,
+) -> (Vec<bool>, Option<f64>) {
+    ctx.phase("density", || {
+        let (g0, ord0) = search_grid(input);
+        let dup = duplicates(&g0, &ord0, input);
+        let p0: Vec<DVec3> = ord0.iter().map(|&i| input[i as usize]).collect();
+        let dup0: Vec<bool> = ord0.iter().map(|&i| dup[i as usize]).collect();
+        let eligible = |i: usize| !dup0[i];
+        let rho = mean_nn(&g0, &p0, &eligible, p.rho_sample, rng);
+        (dup, rho)
+    })
+}
+
+/// The points in hash-grid order with the grid and their starting state.
+struct Layout {
+    grid: Grid,
+    /// Input index of every point in grid order.
+    order: Vec<u32>,
+    /// The points in grid order.
+    pts: Vec<DVec3>,
+    /// Grid-order index of every input point.
+    inv: Vec<u32>,
+    /// Per point in grid order: a duplicate, refused from the start.
+    refused0: Vec<bool>,
+    /// Centroid of the points not refused.
+    centroid: DVec3,
+}
+
+/// P4: the hash grid of cell `h` (timed as `grid`), then the grid-order views of the
+/// input and the centroid of the distinct points.
+fn grid_phase(input: &[DVec3], dup: &[bool], h: f64, ctx: &mut RunCtx) -> Layout {
+    let (grid, order, pts) = ctx.phase("grid", || {
+        let (grid, order) = Grid::build(input, h);
+        let pts: Vec<DVec3> = order.iter().map(|&i| input[i as usize]).collect();
+        (grid, order, pts)
+    });
+    let mut inv = vec![0u32; input.len()];
+    for (g, &i) in order.iter().enumerate() {
+        inv[i as usize] = g as u32;
+    }
+    let refused0: Vec<bool> = order.iter().map(|&i| dup[i as usize]).collect();
+    let centroid = {
+        let (s, c) = pts
+            .iter()
+            .zip(&refused0)
+            .filter(|(_, d)| !**d)
+            .fold((DVec3::ZERO, 0usize), |(s, c), (q, _)| (s + *q, c + 1));
+        s / c.max(1) as f64
+    };
+    Layout {
+        grid,
+        order,
+        pts,
+        inv,
+        refused0,
+        centroid,
+    }
+}
+
+/// The mesher configuration for radius `r0` and spacing `rho`.
+fn mesher_cfg(p: &PriorityFrontParams, r0: f64, rho: f64) -> Cfg {
+    Cfg {
+        r: r0,
+        cos_alpha: p.alpha_max_deg.to_radians().cos(),
+        cos_beta: p.beta_max_deg.to_radians().cos(),
+        w: [p.w1, p.w2, p.w3],
+        seg_dist: p.score_distance == ScoreDistance::Segment,
+        apex_rule: p.apex_angle_rule,
+        link_prev: p.link_prev,
+        glue_mirror: p.glue_mirror,
+        cross_factor: p.cross_radius,
+        reject_free_inside: p.reject_free_inside,
+        front_inside_check: p.front_inside_check,
+        fill_any_angle: p.fill_any_angle,
+        sector_check: p.sector_check,
+        revisit_passes: p.revisit_passes,
+        sin_elev: if p.free_elevation_max_deg >= 90.0 {
+            1.0
+        } else {
+            p.free_elevation_max_deg.to_radians().sin()
+        },
+        height_r: p.free_height_max / p.k,
+        support_k: p.support_neighbours,
+        support_tol: p.support_tolerance * rho,
+        support_radius: p.support_radius,
+        support_share: p.support_share,
+    }
+}
+
+/// Takes the result out of a finished mesher.
+fn take_grown(m: &mut Mesher) -> Grown {
+    Grown {
+        loops: m.loops(),
+        tris: std::mem::take(&mut m.tris),
+        state: std::mem::take(&mut m.state),
+        stats: m.stats.clone(),
+    }
+}
+
+/// M0-M8 on one thread: seeds, growth and restarts over the whole cloud, then small
+/// holes closed; timed as `grow` from `t_grow`.
+fn grow_serial(
+    lay: &Layout,
+    cfg: Cfg,
+    dcfg: &DomainCfg,
+    rng: &mut ChaCha8Rng,
+    ctx: &mut RunCtx,
+    t_grow: Instant,
+) -> Result<Grown, MethodError> {
+    let p = dcfg.params;
+    let mut m = Mesher::new(&lay.pts, &lay.grid, cfg, &lay.refused0);
+    m.run_domain(dcfg, rng, ctx)?;
+    m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
+    end_phase(ctx, "grow", t_grow);
+    Ok(take_grown(&mut m))
+}
+
+/// M0-M8 in parallel slabs, timed as `grow` from `t_grow`.
+fn grow_slabs_phase(
+    lay: &Layout,
+    cfg: &Cfg,
+    dcfg: &DomainCfg,
+    ctx: &mut RunCtx,
+    t_grow: Instant,
+) -> Result<Vec<parallel::SlabOut>, MethodError> {
+    let p = dcfg.params;
+    let outs = parallel::grow_slabs(
+        &lay.pts,
+        &lay.refused0,
+        lay.grid.lat.h(),
+        cfg,
+        dcfg,
+        p.threads,
+        ctx.seed,
+        ctx,
+    )?;
+    end_phase(ctx, "grow", t_grow);
+    Ok(outs)
+}
+
+/// Joins the slab meshes into one mesher (timed as `stitch`): imports them, sweeps the
+/// bands and every front, restarts over the whole cloud for what the slabs left, then
+/// closes small holes (and zips parallel loops with `stitch_zip`).
+fn stitch_phase(
+    lay: &Layout,
+    cfg: Cfg,
+    dcfg: &DomainCfg,
+    outs: &[parallel::SlabOut],
+    rng: &mut ChaCha8Rng,
+    ctx: &mut RunCtx,
+) -> Result<Grown, MethodError> {
+    let p = dcfg.params;
+    let t_st = Instant::now();
+    let mut m = Mesher::new(&lay.pts, &lay.grid, cfg, &lay.refused0);
+    parallel::stitch_import(&mut m, outs, p.stitch_one_sided);
+    // One-sided sweep of the bands (no revisits yet), then every front.
+    let passes = m.cfg.revisit_passes;
+    m.cfg.revisit_passes = 0;
+    m.grow(ctx)?;
+    m.cfg.revisit_passes = passes;
+    m.repush_all();
+    m.grow(ctx)?;
+    // Restarts over the whole cloud for what the slabs left.
+    m.restarts(dcfg, rng, ctx)?;
+    m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
+    if p.stitch_zip {
+        m.stats.holes_closed += m.zip_parallel_loops();
+    }
+    end_phase(ctx, "stitch", t_st);
+    Ok(take_grown(&mut m))
+}
+
+/// M9 (timed as `output`): the faces in input indices and the sorted input indices of
+/// the points left Free or Refused.
+fn output_phase(
+    grown: &Grown,
+    order: &[u32],
+    n: usize,
+    ctx: &mut RunCtx,
+) -> (Vec<[u32; 3]>, Vec<u32>) {
+    ctx.phase("output", || {
+        let faces: Vec<[u32; 3]> = grown
+            .tris
+            .iter()
+            .map(|t| t.map(|g| order[g as usize]))
+            .collect();
+        let mut refused: Vec<u32> = (0..n)
+            .filter(|&g| grown.state[g] == FREE || grown.state[g] == REFUSED)
+            .map(|g| order[g])
+            .collect();
+        refused.sort_unstable();
+        (faces, refused)
+    })
+}
+
+/// The operation counts and boundary loops of the run (`pts` in grid order).
+fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &PriorityFrontParams) {
+    let s = &grown.stats;
+    num(diag, "seeds", s.seeds as f64);
+    num(diag, "front_edges_processed", s.pops as f64);
+    num(diag, "boundary_pops", s.boundary_pops as f64);
+    num(diag, "joins", s.joins as f64);
+    num(diag, "fills", s.fills as f64);
+    num(diag, "links", (s.link_next + s.link_prev) as f64);
+    num(diag, "link_next", s.link_next as f64);
+    num(diag, "link_prev", s.link_prev as f64);
+    num(diag, "glues", (s.glues + s.glue_mirrors) as f64);
+    num(diag, "glue_mirrors", s.glue_mirrors as f64);
+    num(diag, "glue_rejects", s.glue_rejects as f64);
+    num(diag, "cross_rejects", s.cross_rejects as f64);
+    num(diag, "threads", p.threads as f64);
+    num(diag, "fail_rules", s.fail_rules as f64);
+    num(diag, "sector_rejects", s.sector_rejects as f64);
+    num(diag, "boundary_loops", grown.loops.len() as f64);
+    num(diag, "holes_closed", s.holes_closed as f64);
+    diag.insert(
+        "boundary_loop_sizes".into(),
+        Diagnostic::Series(grown.loops.iter().map(|l| l.len() as f64).collect()),
+    );
+    let mut cents = Vec::with_capacity(grown.loops.len() * 3);
+    for l in &grown.loops {
+        let c = l.iter().map(|&v| pts[v as usize]).sum::<DVec3>() / l.len().max(1) as f64;
+        cents.extend([c.x, c.y, c.z]);
+    }
+    diag.insert("boundary_loop_centroids".into(), Diagnostic::Series(cents));
 }
 
 /// A one-line record of every ASSUMPTION flag in force (spec §7 item 9).

@@ -11,12 +11,17 @@
 //! vertices are exactly the input points.
 //!
 //! Files: [`params`], [`umbrella`] (BuildUmbrella on the link graph), [`matching`]
-//! (Table 3.1 classes, umbrella states, A-07 stop rules), [`engine`] (attributes,
-//! iterations), [`normals`] (`ufm-mesh`, Algorithm B of chapter 4), [`nvc`] (Algorithm
-//! C of chapter 5: Normal Vector Cone filtering, the `nvc` option, off by default).
+//! (Table 3.1 classes, umbrella states, A-07 stop rules), [`complex`] (the CSR complex
+//! and its per-triangle attributes), [`engine`] (iterations), [`facet_fit`] (the normal
+//! fits shared by Algorithms B and C), [`normals`] (`ufm-mesh`, Algorithm B of chapter
+//! 4), [`nvc`] (Algorithm C of chapter 5: Normal Vector Cone filtering, the `nvc`
+//! option, off by default). Dependencies run one way: `complex` <- `facet_fit` <- `nvc`
+//! <- `engine` <- `normals`.
 //! See `docs/methods/ufm.md`.
 
+pub mod complex;
 pub mod engine;
+pub mod facet_fit;
 pub mod geometry;
 pub mod matching;
 pub mod normals;

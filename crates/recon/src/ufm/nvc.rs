@@ -13,9 +13,9 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::engine::{Complex, blocks};
+use super::complex::{Complex, blocks};
+use super::facet_fit::{dtu_plane_fit, facet_average};
 use super::geometry::fold_angles;
-use super::normals::{dtu_plane_fit, facet_average};
 use super::params::{Nvc, UfmParams};
 use super::umbrella::LinkGraph;
 
