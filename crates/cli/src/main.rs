@@ -4,6 +4,10 @@
 //! Errors print one line on stderr; bad input (unreadable or malformed files, bad
 //! parameters) exits with code 2, other failures with 1.
 
+// Doc comments of the argument structs are the `--help` text, where `<name>` is a
+// placeholder for the user, not HTML.
+#![allow(rustdoc::invalid_html_tags)]
+
 mod cmd;
 
 use std::process::ExitCode;

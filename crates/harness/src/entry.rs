@@ -2,7 +2,7 @@
 //! constructor from JSON parameters, plus the ground truth only oracles receive. Built
 //! from a method's own [`Describe`] impl ([`normals`], [`features`], [`filter`],
 //! [`reconstruct`]) or, for oracles and test-only methods, from a closure ([`custom`]).
-//! The list of registered methods is [`crate::registry`].
+//! The list of registered methods is [`mod@crate::registry`].
 
 use std::sync::Arc;
 

@@ -54,7 +54,7 @@ pub struct Phase {
     pub cpu_s: Option<f64>,
 }
 
-/// Cost summary of a run: its phases (from geom's [`PhaseTimer`], the one timer of the
+/// Cost summary of a run: its phases (from geom's [`PhaseTimer`](reconbench_geom::method::PhaseTimer), the one timer of the
 /// project), process CPU time, threads and peak memory.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CostReport {

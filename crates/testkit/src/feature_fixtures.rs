@@ -10,13 +10,18 @@ use reconbench_geom::method::FeatureClass;
 /// A test cloud with its sharp feature segments and corners.
 #[derive(Debug)]
 pub struct Truth {
+    /// The sample points.
     pub points: Vec<DVec3>,
+    /// Sharp feature segments.
     pub edges: Vec<(DVec3, DVec3)>,
+    /// Corners (three or more patches meet).
     pub corners: Vec<DVec3>,
+    /// Sampling spacing.
     pub spacing: f64,
 }
 
 impl Truth {
+    /// The points as a cloud.
     pub fn cloud(&self) -> PointCloud {
         PointCloud::new(self.points.clone()).unwrap()
     }
@@ -147,6 +152,7 @@ pub struct Scores {
     pub coverage: f64,
 }
 
+/// Scores `labels` against the truth, with a detected point counting within `r`.
 pub fn score(t: &Truth, labels: &[FeatureClass], r: f64) -> Scores {
     let det: Vec<DVec3> = t
         .points
@@ -191,6 +197,7 @@ pub fn score(t: &Truth, labels: &[FeatureClass], r: f64) -> Scores {
     }
 }
 
+/// Number of points labelled edge or corner.
 pub fn count_features(labels: &[FeatureClass]) -> usize {
     labels.iter().filter(|c| **c != FeatureClass::None).count()
 }

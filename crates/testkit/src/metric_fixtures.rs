@@ -12,11 +12,14 @@ use reconbench_synth::{Sample, Shape, SurfacePoint};
 /// the diagonal from `aabb()`).
 #[derive(Debug, Clone, Copy)]
 pub struct TestSphere {
+    /// Centre.
     pub center: DVec3,
+    /// Radius.
     pub radius: f64,
 }
 
 impl TestSphere {
+    /// The unit sphere at the origin.
     pub fn unit() -> Self {
         TestSphere {
             center: DVec3::ZERO,
@@ -176,6 +179,7 @@ pub fn brute_distance(mesh: &TriMesh, p: DVec3) -> f64 {
 pub struct Lcg(pub u64);
 
 impl Lcg {
+    /// The next uniform number in `[0, 1)`.
     pub fn next_f64(&mut self) -> f64 {
         self.0 = self
             .0
@@ -183,6 +187,7 @@ impl Lcg {
             .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
+    /// A uniformly distributed unit vector.
     pub fn unit_vector(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(

@@ -15,9 +15,17 @@ pub enum Surface {
     /// Torus with major radius `R` and minor radius `r` around the z axis (genus 1).
     Torus(f64, f64),
     /// Open wavy sheet `z = amp sin(x) cos(y)` over `[-size/2, size/2]^2` (one boundary).
-    Sheet { size: f64, amp: f64 },
+    Sheet {
+        /// Side of the square domain.
+        size: f64,
+        /// Amplitude of the waves.
+        amp: f64,
+    },
     /// Two parallel unit squares `z = 0` and `z = gap` (two boundaries).
-    TwoSheets { gap: f64 },
+    TwoSheets {
+        /// Distance between the sheets.
+        gap: f64,
+    },
 }
 
 impl Surface {
