@@ -37,8 +37,13 @@ fn m_mesh_round_trips_exactly() {
 #[test]
 fn m_polygon_is_refused_with_its_line() {
     let text = b"Vertex 1 0 0 0\nVertex 2 1 0 0\nVertex 3 1 1 0\nVertex 4 0 1 0\nFace 1 1 2 3 4\n";
-    let e = io::mesh_from_bytes(text, Format::M, "q.m").unwrap_err().to_string();
-    assert!(e.contains("q.m") && e.contains("line 5") && e.contains("4 vertices"), "{e}");
+    let e = io::mesh_from_bytes(text, Format::M, "q.m")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("q.m") && e.contains("line 5") && e.contains("4 vertices"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -38,8 +38,8 @@ use crate::cloud::{Channel, PointCloud};
 use crate::error::{GeomError, Location, Result};
 use crate::mesh::TriMesh;
 
-mod obj;
 mod m;
+mod obj;
 mod off;
 mod ply;
 mod stl;
