@@ -88,6 +88,18 @@ const BROKEN: &[(&str, &str)] = &[
         "declares 3 points, but the file has 2",
     ),
     ("non_numeric_count.pts", "'three'"),
+    (
+        "zero_vertex_id.m",
+        "vertex id is 0; ids of .m files are 1-based",
+    ),
+    ("unknown_vertex_id.m", "refers to vertex id 9"),
+    (
+        "duplicate_vertex_id.m",
+        "vertex id 2 is defined twice (first on line 2)",
+    ),
+    ("unclosed_attribute.m", "without a closing '}'"),
+    ("unknown_record_a3d.pts", "unknown A3d record 'q'"),
+    ("normal_before_point_a3d.pts", "before any point"),
 ];
 
 fn check_broken_error(path: &Path, err: GeomError, fragment: &str) {

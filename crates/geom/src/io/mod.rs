@@ -1,4 +1,5 @@
-//! Reading and writing point clouds and triangle meshes: PLY, OBJ, OFF, STL, XYZ and PTS.
+//! Reading and writing point clouds and triangle meshes: PLY, OBJ, OFF, STL, XYZ, PTS
+//! (plain or Hoppe's A3d stream form, told apart by content) and Hoppe's `.m`.
 //!
 //! The format is chosen from the file extension (case-insensitive) or given explicitly
 //! with [`Format`]. Every file function is a thin wrapper around an in-memory variant
@@ -20,6 +21,7 @@
 //! | OFF    | yes (vertex-only file) | yes | yes (NOFF) | yes (COFF) | no |
 //! | STL    | read only (welded vertices) | yes | no | no | no |
 //! | XYZ/PTS| yes    | no     | yes     | read only (PTS) | no        |
+//! | M      | yes (vertex-only file) | yes | yes (`{normal=(..)}`) | no | no |
 //!
 //! Text formats write `f64` values with the shortest representation that parses back to
 //! the same bits (at most 17 significant digits), so text round trips are exact.
@@ -36,6 +38,7 @@ use crate::cloud::{Channel, PointCloud};
 use crate::error::{GeomError, Location, Result};
 use crate::mesh::TriMesh;
 
+mod m;
 mod obj;
 mod off;
 mod ply;
@@ -57,19 +60,23 @@ pub enum Format {
     /// Plain text points: `x y z [nx ny nz]` per line.
     Xyz,
     /// Leica-style PTS: an optional count line, then `x y z [intensity] [r g b]` or
-    /// `x y z nx ny nz` per line.
+    /// `x y z nx ny nz` per line; or Hoppe's A3d stream (`p x y z`, `n nx ny nz`),
+    /// recognised by its first record starting with a letter. Written in the plain form.
     Pts,
+    /// Hoppe's `.m` mesh (`Vertex i x y z {normal=(..)}`, `Face j a b c`).
+    M,
 }
 
 impl Format {
     /// Every format, in the order used by messages.
-    pub const ALL: [Format; 6] = [
+    pub const ALL: [Format; 7] = [
         Format::Ply,
         Format::Obj,
         Format::Off,
         Format::Stl,
         Format::Xyz,
         Format::Pts,
+        Format::M,
     ];
 
     /// Lower-case name, which is also the file extension.
@@ -81,12 +88,16 @@ impl Format {
             Format::Stl => "stl",
             Format::Xyz => "xyz",
             Format::Pts => "pts",
+            Format::M => "m",
         }
     }
 
-    /// True for the formats that can hold faces (PLY, OBJ, OFF, STL).
+    /// True for the formats that can hold faces (PLY, OBJ, OFF, STL, M).
     pub fn stores_faces(self) -> bool {
-        matches!(self, Format::Ply | Format::Obj | Format::Off | Format::Stl)
+        matches!(
+            self,
+            Format::Ply | Format::Obj | Format::Off | Format::Stl | Format::M
+        )
     }
 
     /// True for the formats that can be written from a point cloud (everything but STL).
@@ -411,6 +422,7 @@ fn parse(bytes: &[u8], format: Format, path: &Path) -> Result<Parsed> {
         Format::Stl => stl::parse(bytes, path),
         Format::Xyz => xyz::parse(bytes, path, false),
         Format::Pts => xyz::parse(bytes, path, true),
+        Format::M => m::parse(bytes, path),
     }
 }
 
@@ -547,6 +559,7 @@ fn encode(
         Format::Stl => stl::write(w, g, options.stl_binary),
         Format::Xyz => xyz::write(w, g, false),
         Format::Pts => xyz::write(w, g, true),
+        Format::M => m::write(w, g),
     }
 }
 

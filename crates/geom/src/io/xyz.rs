@@ -37,6 +37,9 @@ fn describe(layouts: &[(usize, &str)]) -> String {
 }
 
 pub(crate) fn parse(bytes: &[u8], path: &Path, pts: bool) -> Result<Parsed> {
+    if pts && is_a3d(bytes) {
+        return parse_a3d(bytes, path);
+    }
     let layouts = if pts { PTS_LAYOUTS } else { XYZ_LAYOUTS };
     let mut positions = Vec::new();
     let mut normals = Vec::new();
@@ -117,6 +120,113 @@ pub(crate) fn parse(bytes: &[u8], path: &Path, pts: bool) -> Result<Parsed> {
         } else {
             Vec::new()
         },
+        ..Parsed::default()
+    })
+}
+
+/// True when the first record that is not blank or a comment starts with a one-letter
+/// token: Hoppe's A3d stream form (`p x y z`), not a plain `x y z` PTS file.
+fn is_a3d(bytes: &[u8]) -> bool {
+    for (_, raw) in Lines::new(bytes) {
+        let Ok(line) = std::str::from_utf8(raw) else {
+            return false;
+        };
+        let t = line.trim_start();
+        if t.is_empty() || t.starts_with('#') || t.starts_with("//") {
+            continue;
+        }
+        let first = t.split_ascii_whitespace().next().unwrap_or("");
+        return first.len() == 1 && first.as_bytes()[0].is_ascii_alphabetic();
+    }
+    false
+}
+
+/// Hoppe's A3d stream points: `p x y z` is a point, `n x y z` the normal of the point
+/// before it; `d`, `s`, `g` (and `#` comment) records are skipped; any other record is
+/// an error naming its line. Normals are kept when every point has one; a file where
+/// only some points have one is refused.
+fn parse_a3d(bytes: &[u8], path: &Path) -> Result<Parsed> {
+    let mut positions = Vec::new();
+    let mut normals: Vec<Option<DVec3>> = Vec::new();
+    let mut first_normal: Option<usize> = None;
+    let mut first_without: Option<usize> = None;
+    let mut point_lines = Vec::new();
+    for (n, raw) in Lines::new(bytes) {
+        let line = line_str(path, n, raw)?;
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let err = |m: String| format_err(path, Location::Line(n), m);
+        let fields: Vec<&str> = t.split_ascii_whitespace().collect();
+        let three = |what: [&str; 3]| -> Result<DVec3> {
+            if fields.len() != 4 {
+                return Err(err(format!(
+                    "a '{}' record has {} values; expected 3",
+                    fields[0],
+                    fields.len() - 1
+                )));
+            }
+            Ok(DVec3::new(
+                parse_finite(path, n, fields[1], what[0])?,
+                parse_finite(path, n, fields[2], what[1])?,
+                parse_finite(path, n, fields[3], what[2])?,
+            ))
+        };
+        match fields[0] {
+            "p" => {
+                positions.push(three(["x", "y", "z"])?);
+                normals.push(None);
+                point_lines.push(n);
+            }
+            "n" => {
+                let v = three(["nx", "ny", "nz"])?;
+                match normals.last_mut() {
+                    None => {
+                        return Err(err(
+                            "found a normal ('n' record) before any point; in an A3d stream \
+                             a normal follows its 'p' record"
+                                .into(),
+                        ));
+                    }
+                    Some(Some(_)) => {
+                        return Err(err(
+                            "found a second normal ('n' record) for the same point".into()
+                        ));
+                    }
+                    Some(slot) => *slot = Some(v),
+                }
+                first_normal.get_or_insert(n);
+            }
+            "d" | "s" | "g" => {}
+            other => {
+                return Err(err(format!(
+                    "unknown A3d record {}; expected p (point), n (normal), d, s, g or a # \
+                     comment",
+                    super::text::show(other)
+                )));
+            }
+        }
+    }
+    if let Some(nl) = first_normal {
+        if let Some(i) = normals.iter().position(Option::is_none) {
+            first_without.get_or_insert(point_lines[i]);
+        }
+        if let Some(pl) = first_without {
+            return Err(format_err(
+                path,
+                Location::Line(pl),
+                format!(
+                    "this point has no normal, but the point before line {nl} has one; \
+                     expected a normal for every point or for none"
+                ),
+            ));
+        }
+    }
+    let normals = first_normal.map(|_| normals.into_iter().flatten().collect());
+    Ok(Parsed {
+        positions,
+        normals,
         ..Parsed::default()
     })
 }

@@ -1,0 +1,1 @@
+Vertex 1 0 0 0 {normal=(0 0 1)
