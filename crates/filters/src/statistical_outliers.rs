@@ -15,6 +15,9 @@ use reconbench_geom::method::{
 use reconbench_geom::spatial::knn_self_table;
 use serde::{Deserialize, Serialize};
 
+/// Relative slack on the removal limit that absorbs rounding in the mean distances.
+const TIE_REL: f64 = 1e-12;
+
 /// Parameters of `statistical-outliers`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -113,7 +116,9 @@ impl Filter for StatisticalOutliers {
         ctx.checkpoint()?;
         let mean = d.iter().sum::<f64>() / n as f64;
         let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n as f64;
-        let limit = mean + self.params.std_ratio * var.sqrt();
+        // Distances within rounding of the limit count as on it, so a cloud whose mean
+        // distances are all equal (a regular sampling) loses no point to rounding.
+        let limit = (mean + self.params.std_ratio * var.sqrt()) * (1.0 + TIE_REL);
         let keep: Vec<usize> = (0..n).filter(|&i| d[i] <= limit).collect();
         let out = cloud.select(&keep)?;
         diagnostics.insert(

@@ -458,7 +458,34 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
     let metrics = Value::Object(to_json(&file.metrics));
     metric_spec::validate_metric_options(&metrics)?;
 
-    // Datasets x points.
+    let datasets = expand_datasets(file)?;
+    let (perturbs, swept_all) = expand_perturbations(file)?;
+    // Methods x params.
+    let mut methods = Vec::new();
+    for (i, m) in file.methods.iter().enumerate() {
+        methods.extend(
+            expand_method(m).map_err(|e| HarnessError::input(format!("methods[{i}]: {e}")))?,
+        );
+    }
+
+    let cells = grid_cells(file, &datasets, &perturbs, &methods, &seeds, &metrics);
+    let mut seen = std::collections::HashSet::new();
+    for c in &cells {
+        if !seen.insert(&c.key) {
+            return Err(HarnessError::input(format!(
+                "two cells resolve to the same spec ({} / {} / {} seed {}): remove the duplicate",
+                c.labels.dataset, c.labels.perturb, c.labels.method, c.spec.seed_index
+            )));
+        }
+    }
+    Ok((cells, swept_all))
+}
+
+/// One expanded dataset: label, shape spec, sampler spec, point count.
+type DatasetConfig = (String, String, String, u64);
+
+/// Expands the `[[datasets]]` over their point counts.
+fn expand_datasets(file: &ExperimentFile) -> Result<Vec<DatasetConfig>> {
     let mut datasets = Vec::new();
     for (i, d) in file.datasets.iter().enumerate() {
         inputs::validate_data(&d.shape, &d.sampler)
@@ -494,7 +521,14 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
         }
     }
 
-    // Perturbation blocks.
+    Ok(datasets)
+}
+
+/// One expanded perturbation setting: label and resolved values.
+type PerturbConfig = (String, BTreeMap<String, Value>);
+
+/// Expands the `[[perturbations]]` blocks; also returns the swept keys (plot axes).
+fn expand_perturbations(file: &ExperimentFile) -> Result<(Vec<PerturbConfig>, Vec<String>)> {
     let blocks: Vec<toml::Table> = if file.perturbations.is_empty() {
         vec![toml::Table::new()]
     } else {
@@ -542,18 +576,22 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
         }
     }
 
-    // Methods x params.
-    let mut methods = Vec::new();
-    for (i, m) in file.methods.iter().enumerate() {
-        methods.extend(
-            expand_method(m).map_err(|e| HarnessError::input(format!("methods[{i}]: {e}")))?,
-        );
-    }
+    Ok((perturbs, swept_all))
+}
 
+/// The grid: datasets x perturbations x methods x seeds, each cell keyed by its spec.
+fn grid_cells(
+    file: &ExperimentFile,
+    datasets: &[DatasetConfig],
+    perturbs: &[PerturbConfig],
+    methods: &[MethodConfig],
+    seeds: &[u32],
+    metrics: &Value,
+) -> Vec<Cell> {
     let salt = key_salt();
     let mut cells = Vec::new();
-    for (dlabel, shape, sampler, points) in &datasets {
-        for (plabel, perturb) in &perturbs {
+    for (dlabel, shape, sampler, points) in datasets {
+        for (plabel, perturb) in perturbs {
             let data = DataSpec {
                 shape: shape.clone(),
                 sampler: sampler.clone(),
@@ -561,8 +599,8 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
                 perturb: perturb.clone(),
             };
             let data_hash = hash_value(&salt, &serde_json::to_value(&data).unwrap_or(Value::Null));
-            for (mlabel, entry, params, pre) in &methods {
-                for &s in &seeds {
+            for (mlabel, entry, params, pre) in methods {
+                for &s in seeds {
                     let spec = CellSpec {
                         data: data.clone(),
                         method: entry.name.to_string(),
@@ -596,16 +634,7 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
             }
         }
     }
-    let mut seen = std::collections::HashSet::new();
-    for c in &cells {
-        if !seen.insert(&c.key) {
-            return Err(HarnessError::input(format!(
-                "two cells resolve to the same spec ({} / {} / {} seed {}): remove the duplicate",
-                c.labels.dataset, c.labels.perturb, c.labels.method, c.spec.seed_index
-            )));
-        }
-    }
-    Ok((cells, swept_all))
+    cells
 }
 
 /// One expanded method configuration: label, last step, its parameters, earlier steps.

@@ -213,20 +213,59 @@ pub fn write_report(
         || manifest.map_or_else(|| "experiment".to_string(), |m| m.experiment.clone()),
         |e| e.name.clone(),
     );
+    let failed: Vec<&Row> = rows.iter().filter(|r| r.status != Status::Ok).collect();
     let mut md = String::new();
+    write_header(&mut md, &name, exp, manifest, rows.len(), failed.len());
+
+    let expect = match exp {
+        Some(e) => check_expectations(&e.file.expect, &groups)?,
+        None => Vec::new(),
+    };
+    write_expectations(&mut md, &expect);
+
+    let mut table_files = Vec::new();
+    for t in &tables::build(&groups, &opts.metrics) {
+        table_files.extend(write_kind_section(
+            &mut md, dir, t, &groups, opts, &name, exp,
+        )?);
+    }
+    let plot_files = list_files(&dir.join("plots"));
+    write_renders(&mut md, &rows, opts);
+    write_failed(&mut md, &failed);
+
+    let report = dir.join("report.md");
+    crate::error::write_atomic(&report, md.as_bytes())?;
+    Ok(ReportOutput {
+        report,
+        tables: table_files,
+        plots: plot_files,
+        expect,
+        rows: rows.len(),
+        failed: failed.len(),
+    })
+}
+
+/// Title, description, cell counts and the provenance line of the last run.
+fn write_header(
+    md: &mut String,
+    name: &str,
+    exp: Option<&Experiment>,
+    manifest: Option<&Manifest>,
+    rows: usize,
+    failed: usize,
+) {
     let _ = writeln!(md, "# {name}\n");
     if let Some(e) = exp
         && !e.file.description.is_empty()
     {
         let _ = writeln!(md, "{}\n", e.file.description.trim());
     }
-    let failed: Vec<&Row> = rows.iter().filter(|r| r.status != Status::Ok).collect();
     let _ = writeln!(
         md,
         "{} cells, {} ok, {} failed. Raw rows: [results.jsonl](results.jsonl); provenance and the resolved grid: [manifest.json](manifest.json).\n",
-        rows.len(),
-        rows.len() - failed.len(),
-        failed.len()
+        rows,
+        rows - failed,
+        failed
     );
     if let Some(run) = manifest.and_then(|m| m.runs.last()) {
         let _ = writeln!(
@@ -246,133 +285,136 @@ pub fn write_report(
             manifest.map_or(1, |m| m.threads_per_worker),
         );
     }
+}
 
-    // Published figures.
-    let expect = match exp {
-        Some(e) => check_expectations(&e.file.expect, &groups)?,
-        None => Vec::new(),
-    };
-    if !expect.is_empty() {
-        let misses = expect.iter().filter(|e| !e.pass).count();
+/// The published figures next to the reproduced ones.
+fn write_expectations(md: &mut String, expect: &[ExpectResult]) {
+    if expect.is_empty() {
+        return;
+    }
+    let misses = expect.iter().filter(|e| !e.pass).count();
+    let _ = writeln!(
+        md,
+        "## Published figures\n\n{} of {} within tolerance.\n",
+        expect.len() - misses,
+        expect.len()
+    );
+    md.push_str("| cells | metric | published | reproduced | ratio | tolerance | source | |\n|---|---|---:|---:|---:|---|---|---|\n");
+    for e in expect {
         let _ = writeln!(
             md,
-            "## Published figures\n\n{} of {} within tolerance.\n",
-            expect.len() - misses,
-            expect.len()
+            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            e.selector,
+            e.metric,
+            fmt_num(e.published),
+            e.reproduced.map_or("no match".into(), fmt_num),
+            e.ratio.map_or("–".into(), fmt_num),
+            e.tol,
+            e.source,
+            if e.pass { "ok" } else { "**MISS**" }
         );
-        md.push_str("| cells | metric | published | reproduced | ratio | tolerance | source | |\n|---|---|---:|---:|---:|---|---|---|\n");
-        for e in &expect {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} |",
-                e.selector,
-                e.metric,
-                fmt_num(e.published),
-                e.reproduced.map_or("no match".into(), fmt_num),
-                e.ratio.map_or("–".into(), fmt_num),
-                e.tol,
-                e.source,
-                if e.pass { "ok" } else { "**MISS**" }
-            );
-        }
-        md.push('\n');
     }
+    md.push('\n');
+}
 
-    // Tables.
+/// One method kind's section: its table (and table files) and plots. Returns the table
+/// files written.
+fn write_kind_section(
+    md: &mut String,
+    dir: &Path,
+    t: &tables::Table,
+    groups: &[Group],
+    opts: &ReportOptions,
+    name: &str,
+    exp: Option<&Experiment>,
+) -> Result<Vec<PathBuf>> {
     let tables_dir = dir.join("tables");
     let mut table_files = Vec::new();
-    let built = tables::build(&groups, &opts.metrics);
-    for t in &built {
-        let stem = t.kind.as_str();
-        let _ = writeln!(md, "## {}\n", kind_title(t.kind));
-        md.push_str("Mean ± std over seeds; best of each dataset and perturbation in bold; ↑ higher is better, ↓ lower is better.\n\n");
-        md.push_str(&tables::markdown(t));
-        let mut links = Vec::new();
-        for fmt in &opts.tables {
-            let (text, ext) = match fmt.as_str() {
-                "md" => (tables::markdown(t), "md"),
-                "tex" => (
-                    tables::latex(t, &format!("{name}: {}", kind_title(t.kind))),
-                    "tex",
-                ),
-                _ => (tables::csv(t), "csv"),
-            };
-            let p = tables_dir.join(format!("{stem}.{ext}"));
-            crate::error::write_atomic(&p, text.as_bytes())?;
-            links.push(format!("[{ext}](tables/{stem}.{ext})"));
-            table_files.push(p);
-        }
-        if !links.is_empty() {
-            let _ = writeln!(md, "\nTable files: {}.\n", links.join(", "));
-        }
-
-        if opts.plots {
-            let plots = kind_plots(
-                t.kind,
-                &groups,
-                &t.columns,
-                opts,
-                exp.map_or(&[][..], |e| &e.swept[..]),
+    let stem = t.kind.as_str();
+    let _ = writeln!(md, "## {}\n", kind_title(t.kind));
+    md.push_str("Mean ± std over seeds; best of each dataset and perturbation in bold; ↑ higher is better, ↓ lower is better.\n\n");
+    md.push_str(&tables::markdown(t));
+    let mut links = Vec::new();
+    for fmt in &opts.tables {
+        let (text, ext) = match fmt.as_str() {
+            "md" => (tables::markdown(t), "md"),
+            "tex" => (
+                tables::latex(t, &format!("{name}: {}", kind_title(t.kind))),
+                "tex",
+            ),
+            _ => (tables::csv(t), "csv"),
+        };
+        let p = tables_dir.join(format!("{stem}.{ext}"));
+        crate::error::write_atomic(&p, text.as_bytes())?;
+        links.push(format!("[{ext}](tables/{stem}.{ext})"));
+        table_files.push(p);
+    }
+    if !links.is_empty() {
+        let _ = writeln!(md, "\nTable files: {}.\n", links.join(", "));
+    }
+    if opts.plots {
+        let plots = kind_plots(
+            t.kind,
+            groups,
+            &t.columns,
+            opts,
+            exp.map_or(&[][..], |e| &e.swept[..]),
+        );
+        for (file, caption, plot) in plots {
+            let stem_path = dir.join("plots").join(&file);
+            crate::plots::write(&plot, &stem_path, (opts.plot_size[0], opts.plot_size[1]))?;
+            let _ = writeln!(
+                md,
+                "![{caption}](plots/{file}.png)\n\n*{caption}* ([svg](plots/{file}.svg))\n"
             );
-            for (file, caption, plot) in plots {
-                let stem_path = dir.join("plots").join(&file);
-                crate::plots::write(&plot, &stem_path, (opts.plot_size[0], opts.plot_size[1]))?;
-                let _ = writeln!(
-                    md,
-                    "![{caption}](plots/{file}.png)\n\n*{caption}* ([svg](plots/{file}.svg))\n"
-                );
-            }
         }
     }
-    let plot_files = list_files(&dir.join("plots"));
+    Ok(table_files)
+}
 
-    // Renders.
+/// The error renders of the rows that have one.
+fn write_renders(md: &mut String, rows: &[Row], opts: &ReportOptions) {
     let renders: Vec<&Row> = rows.iter().filter(|r| r.render.is_some()).collect();
-    if !renders.is_empty() {
+    if renders.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        md,
+        "## Renders\n\nReconstructions coloured by distance to the true surface (fraction of the diagonal, fixed scale 0 to {} for every method), seed index {}, three viewpoints.\n",
+        fmt_num(opts.render_max),
+        renders.iter().map(|r| r.spec.seed_index).min().unwrap_or(0)
+    );
+    for r in renders {
         let _ = writeln!(
             md,
-            "## Renders\n\nReconstructions coloured by distance to the true surface (fraction of the diagonal, fixed scale 0 to {} for every method), seed index {}, three viewpoints.\n",
-            fmt_num(opts.render_max),
-            renders.iter().map(|r| r.spec.seed_index).min().unwrap_or(0)
+            "**{} / {} / {}**\n\n![]({})\n",
+            r.labels.dataset,
+            r.labels.perturb,
+            r.labels.method,
+            r.render.as_deref().unwrap_or_default()
         );
-        for r in renders {
-            let _ = writeln!(
-                md,
-                "**{} / {} / {}**\n\n![]({})\n",
-                r.labels.dataset,
-                r.labels.perturb,
-                r.labels.method,
-                r.render.as_deref().unwrap_or_default()
-            );
-        }
     }
+}
 
-    if !failed.is_empty() {
-        md.push_str("## Failed cells\n\n| dataset | perturbation | method | seed | status | reason |\n|---|---|---|---:|---|---|\n");
-        for r in &failed {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} | {} |",
-                r.labels.dataset,
-                r.labels.perturb,
-                r.labels.method,
-                r.spec.seed_index,
-                r.status.as_str(),
-                r.error.as_deref().unwrap_or("").replace('|', "\\|")
-            );
-        }
-        md.push('\n');
+/// The failed cells with their reasons.
+fn write_failed(md: &mut String, failed: &[&Row]) {
+    if failed.is_empty() {
+        return;
     }
-    let report = dir.join("report.md");
-    crate::error::write_atomic(&report, md.as_bytes())?;
-    Ok(ReportOutput {
-        report,
-        tables: table_files,
-        plots: plot_files,
-        expect,
-        rows: rows.len(),
-        failed: failed.len(),
-    })
+    md.push_str("## Failed cells\n\n| dataset | perturbation | method | seed | status | reason |\n|---|---|---|---:|---|---|\n");
+    for r in failed {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {} |",
+            r.labels.dataset,
+            r.labels.perturb,
+            r.labels.method,
+            r.spec.seed_index,
+            r.status.as_str(),
+            r.error.as_deref().unwrap_or("").replace('|', "\\|")
+        );
+    }
+    md.push('\n');
 }
 
 fn list_files(dir: &Path) -> Vec<PathBuf> {

@@ -140,29 +140,73 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let results = opts.out_dir.join(results_name);
     let manifest_path = opts.out_dir.join(manifest_name);
     let cells = shard_cells(&exp.cells, opts.shard);
-    let timeout_s = opts.timeout_s.unwrap_or(exp.timeout_s);
-    let memory_limit = opts.memory_limit_mib.or(exp.file.memory_limit_mib);
-    let jobs = opts.jobs.max(1);
-
-    // Resume or start afresh.
-    let mut runs = Vec::new();
-    let done: HashSet<String> = if opts.resume {
-        let (rows, _) = read_rows(&results)?;
-        if let Ok(text) = std::fs::read_to_string(&manifest_path)
-            && let Ok(m) = serde_json::from_str::<Manifest>(&text)
-        {
-            runs = m.runs;
-        }
-        rows.into_iter()
-            .filter(|r| !(opts.retry_failed && r.status != Status::Ok))
-            .map(|r| r.key)
-            .collect()
-    } else {
-        if results.exists() {
-            std::fs::remove_file(&results).map_err(|e| HarnessError::io(&results, e))?;
-        }
-        HashSet::new()
+    let limits = Limits {
+        timeout_s: opts.timeout_s.unwrap_or(exp.timeout_s),
+        memory_limit_mib: opts.memory_limit_mib.or(exp.file.memory_limit_mib),
     };
+    let (done, runs) = resume_state(opts, &results, &manifest_path)?;
+    write_manifest(exp, opts, &limits, runs, &cells, &manifest_path)?;
+
+    let todo: Vec<&Cell> = cells.iter().filter(|c| !done.contains(&c.key)).collect();
+    let (ok, mut failed) = run_cells(exp, opts, &limits, &cells, &todo, &results)?;
+    compact(&cells, &results)?;
+    failed.sort_by(|a, b| a.label.cmp(&b.label));
+    Ok(RunSummary {
+        experiment: exp.name.clone(),
+        cells: cells.len(),
+        skipped: cells.len() - todo.len(),
+        ran: todo.len(),
+        ok,
+        failed,
+        wall_s: t0.elapsed().as_secs_f64(),
+        results,
+        manifest: manifest_path,
+    })
+}
+
+/// The per-cell limits of a run.
+struct Limits {
+    timeout_s: f64,
+    memory_limit_mib: Option<u64>,
+}
+
+/// The keys already done (with `--resume`; `--retry-failed` leaves failed ones out) and
+/// the provenance of earlier runs, or a fresh start (the old results file removed).
+fn resume_state(
+    opts: &RunOptions,
+    results: &Path,
+    manifest_path: &Path,
+) -> Result<(HashSet<String>, Vec<Provenance>)> {
+    if !opts.resume {
+        if results.exists() {
+            std::fs::remove_file(results).map_err(|e| HarnessError::io(results, e))?;
+        }
+        return Ok((HashSet::new(), Vec::new()));
+    }
+    let (rows, _) = read_rows(results)?;
+    let mut runs = Vec::new();
+    if let Ok(text) = std::fs::read_to_string(manifest_path)
+        && let Ok(m) = serde_json::from_str::<Manifest>(&text)
+    {
+        runs = m.runs;
+    }
+    let done = rows
+        .into_iter()
+        .filter(|r| !(opts.retry_failed && r.status != Status::Ok))
+        .map(|r| r.key)
+        .collect();
+    Ok((done, runs))
+}
+
+/// Writes the manifest (this run's provenance appended to the earlier runs').
+fn write_manifest(
+    exp: &Experiment,
+    opts: &RunOptions,
+    limits: &Limits,
+    mut runs: Vec<Provenance>,
+    cells: &[Cell],
+    path: &Path,
+) -> Result<()> {
     runs.push(Provenance::collect());
     let manifest = Manifest {
         experiment: exp.name.clone(),
@@ -172,24 +216,31 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
             .as_ref()
             .and_then(|p| std::fs::read_to_string(p).ok()),
         shard: opts.shard,
-        jobs,
+        jobs: opts.jobs.max(1),
         threads_per_worker: opts.threads_per_worker,
-        timeout_s,
-        memory_limit_mib: memory_limit,
+        timeout_s: limits.timeout_s,
+        memory_limit_mib: limits.memory_limit_mib,
         runs,
-        cells: cells.clone(),
+        cells: cells.to_vec(),
     };
     let text = serde_json::to_string_pretty(&manifest)
         .map_err(|e| HarnessError::failure(format!("manifest: {e}")))?;
-    crate::error::write_atomic(&manifest_path, text.as_bytes())?;
+    crate::error::write_atomic(path, text.as_bytes())
+}
 
-    let todo: Vec<&Cell> = cells.iter().filter(|c| !done.contains(&c.key)).collect();
-    let skipped = cells.len() - todo.len();
+/// Runs `todo` on `opts.jobs` worker threads, each cell in its own worker process,
+/// appending every row as it arrives. Returns the ok count and the failed cells.
+fn run_cells(
+    exp: &Experiment,
+    opts: &RunOptions,
+    limits: &Limits,
+    cells: &[Cell],
+    todo: &[&Cell],
+    results: &Path,
+) -> Result<(usize, Vec<FailedCell>)> {
     // Renders: reconstructions at the lowest seed index of each configuration.
     let min_seed = cells.iter().map(|c| c.spec.seed_index).min().unwrap_or(0);
-    let report = &exp.file.report;
-
-    let store = Mutex::new(Store::open(&results)?);
+    let store = Mutex::new(Store::open(results)?);
     let next = AtomicUsize::new(0);
     let failed = Mutex::new(Vec::new());
     let ok = AtomicUsize::new(0);
@@ -198,7 +249,7 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let running: Arc<Mutex<BTreeMap<usize, (String, f64)>>> = Arc::default();
 
     std::thread::scope(|s| {
-        for _ in 0..jobs.min(todo.len().max(1)) {
+        for _ in 0..opts.jobs.max(1).min(todo.len().max(1)) {
             s.spawn(|| {
                 loop {
                     let i = next.fetch_add(1, Ordering::SeqCst);
@@ -206,33 +257,14 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
                     if write_error.lock().map(|e| e.is_some()).unwrap_or(true) {
                         break;
                     }
-                    let render = (report.renders
-                        && cell.spec.kind == MethodKind::Reconstruct
-                        && cell.spec.seed_index == min_seed)
-                        .then(|| RenderRequest {
-                            path: opts
-                                .out_dir
-                                .join("renders")
-                                .join(format!("{}.png", cell.key)),
-                            rel: format!("renders/{}.png", cell.key),
-                            max: report.render_max,
-                            size: report.render_size,
-                        });
-                    let label = format!("{} / {}", cell.labels.dataset, cell.labels.method);
-                    let progress: Option<ProgressFn> = (!bar.is_hidden()).then(|| {
-                        let (bar, running, label) = (bar.clone(), running.clone(), label.clone());
-                        Arc::new(move |f: f64| {
-                            if let Ok(mut r) = running.lock() {
-                                r.insert(i, (label.clone(), f));
-                                bar.set_message(running_message(&r));
-                            }
-                        }) as ProgressFn
-                    });
+                    let render = render_request(exp, opts, cell, min_seed);
+                    let progress =
+                        (!bar.is_hidden()).then(|| cell_progress(&bar, &running, i, cell));
                     let row = run_cell_with_progress(
                         cell,
                         &opts.worker,
-                        timeout_s,
-                        memory_limit,
+                        limits.timeout_s,
+                        limits.memory_limit_mib,
                         opts.threads_per_worker,
                         render,
                         progress,
@@ -245,18 +277,7 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
                     if row.status == Status::Ok {
                         ok.fetch_add(1, Ordering::SeqCst);
                     } else {
-                        let f = FailedCell {
-                            key: row.key.clone(),
-                            label: format!(
-                                "{} / {} / {} seed {}",
-                                row.labels.dataset,
-                                row.labels.perturb,
-                                row.labels.method,
-                                row.spec.seed_index
-                            ),
-                            status: row.status,
-                            reason: row.error.clone().unwrap_or_default(),
-                        };
+                        let f = failed_cell(&row);
                         let msg = format!(
                             "cell {} failed ({}): {}",
                             f.label,
@@ -293,32 +314,75 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     if let Some(e) = write_error.into_inner().ok().flatten() {
         return Err(e);
     }
-    drop(store);
+    Ok((
+        ok.load(Ordering::SeqCst),
+        failed.into_inner().unwrap_or_default(),
+    ))
+}
 
-    // Compact: keep the latest row per key of this grid, sorted by grid index, so a
-    // finished run's file does not depend on the completion order.
+/// The render a reconstruction cell at the lowest seed index asks for, if renders are on.
+fn render_request(
+    exp: &Experiment,
+    opts: &RunOptions,
+    cell: &Cell,
+    min_seed: u32,
+) -> Option<RenderRequest> {
+    let report = &exp.file.report;
+    (report.renders
+        && cell.spec.kind == MethodKind::Reconstruct
+        && cell.spec.seed_index == min_seed)
+        .then(|| RenderRequest {
+            path: opts
+                .out_dir
+                .join("renders")
+                .join(format!("{}.png", cell.key)),
+            rel: format!("renders/{}.png", cell.key),
+            max: report.render_max,
+            size: report.render_size,
+        })
+}
+
+/// Shows the progress a running cell reports in the bar's message.
+fn cell_progress(
+    bar: &indicatif::ProgressBar,
+    running: &Arc<Mutex<BTreeMap<usize, (String, f64)>>>,
+    i: usize,
+    cell: &Cell,
+) -> ProgressFn {
+    let label = format!("{} / {}", cell.labels.dataset, cell.labels.method);
+    let (bar, running) = (bar.clone(), running.clone());
+    Arc::new(move |f: f64| {
+        if let Ok(mut r) = running.lock() {
+            r.insert(i, (label.clone(), f));
+            bar.set_message(running_message(&r));
+        }
+    })
+}
+
+/// The summary entry of a failed row.
+fn failed_cell(row: &Row) -> FailedCell {
+    FailedCell {
+        key: row.key.clone(),
+        label: format!(
+            "{} / {} / {} seed {}",
+            row.labels.dataset, row.labels.perturb, row.labels.method, row.spec.seed_index
+        ),
+        status: row.status,
+        reason: row.error.clone().unwrap_or_default(),
+    }
+}
+
+/// Keeps the latest row per key of this grid, sorted by grid index, so a finished run's
+/// file does not depend on the completion order.
+fn compact(cells: &[Cell], results: &Path) -> Result<()> {
     let keys: HashSet<&str> = cells.iter().map(|c| c.key.as_str()).collect();
-    let (rows, _) = read_rows(&results)?;
+    let (rows, _) = read_rows(results)?;
     let rows: Vec<Row> = dedupe_sorted(
         rows.into_iter()
             .filter(|r| keys.contains(r.key.as_str()))
             .collect(),
     );
-    write_rows(&results, &rows)?;
-
-    let mut failed = failed.into_inner().unwrap_or_default();
-    failed.sort_by(|a, b| a.label.cmp(&b.label));
-    Ok(RunSummary {
-        experiment: exp.name.clone(),
-        cells: cells.len(),
-        skipped,
-        ran: todo.len(),
-        ok: ok.load(Ordering::SeqCst),
-        failed,
-        wall_s: t0.elapsed().as_secs_f64(),
-        results,
-        manifest: manifest_path,
-    })
+    write_rows(results, &rows)
 }
 
 /// The progress bar's message: the running cells that reported progress.
