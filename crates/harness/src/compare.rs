@@ -329,7 +329,7 @@ mod tests {
         let c = compare(&base, &cur, &Tolerances::default());
         assert_eq!(c.rekeyed, ["d / p / m"]);
         assert!(c.lost.is_empty() && c.new.is_empty(), "{c:?}");
-        assert_eq!(c.compared, 1);
+        assert_eq!(c.compared, base.configs[0].metrics.len());
         // Two current configurations with that label: no guess, lost and new.
         let mut two = cur.clone();
         let mut other = two.configs[0].clone();

@@ -356,7 +356,7 @@ fn bad_input_is_an_error() {
             ..Default::default()
         });
         assert!(
-            matches!(&e, Err(MethodError::InvalidParameter { name, .. }) if name == "max_fold"),
+            matches!(&e, Err(MethodError::InvalidParameter { name, .. }) if name == "max_fold_deg"),
             "{bad}: {e:?}"
         );
     }
@@ -792,21 +792,21 @@ fn nvc_sets_respect_cone_and_range() {
 fn bad_nvc_parameters_are_errors() {
     let cases: [(&str, UfmParams); 8] = [
         (
-            "nvc_angle",
+            "nvc_angle_deg",
             UfmParams {
                 nvc_angle: 0.0,
                 ..Default::default()
             },
         ),
         (
-            "nvc_angle",
+            "nvc_angle_deg",
             UfmParams {
                 nvc_angle: 91.0,
                 ..Default::default()
             },
         ),
         (
-            "nvc_angle",
+            "nvc_angle_deg",
             UfmParams {
                 nvc_angle: f64::NAN,
                 ..Default::default()
