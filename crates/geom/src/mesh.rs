@@ -153,6 +153,20 @@ impl TriMesh {
         acc.into_iter().map(DVec3::normalize_or_zero).collect()
     }
 
+    /// Area-weighted vertex normals: the sum of the cross products of the incident faces
+    /// (each is twice the face area times its unit normal), normalised. This is seed 000's
+    /// "type-2" reference normal of a mesh vertex. Isolated vertices get zero.
+    pub fn area_weighted_normals(&self) -> Vec<DVec3> {
+        let mut acc = vec![DVec3::ZERO; self.vertices.len()];
+        for (f, idx) in self.faces.iter().enumerate() {
+            let c = self.face_cross(f);
+            for &v in idx {
+                acc[v as usize] += c;
+            }
+        }
+        acc.into_iter().map(DVec3::normalize_or_zero).collect()
+    }
+
     /// Flips the orientation of the faces whose flag is set.
     pub fn flip_faces(&mut self, flip: &[bool]) {
         for (f, &fl) in self.faces.iter_mut().zip(flip) {

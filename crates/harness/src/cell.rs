@@ -87,19 +87,24 @@ fn keep_metrics(row: BTreeMap<String, f64>) -> BTreeMap<String, f64> {
 pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, String> {
     let spec = &cell.spec;
     let entry = registry::find(&spec.method).map_err(|e| e.to_string())?;
-    let shape: Arc<dyn Shape> = Arc::from(
-        reconbench_synth::from_spec(&spec.data.shape).map_err(|e| format!("shape: {e}"))?,
-    );
+    let shape: Option<Arc<dyn Shape>> =
+        crate::inputs::build_shape(&spec.data).map_err(|e| format!("data: {e}"))?;
     let t = Instant::now();
     let mut data =
         generate(&spec.data, shape.clone(), cell.data_seed).map_err(|e| format!("data: {e}"))?;
     let generate_s = t.elapsed().as_secs_f64();
+    let n_input = data.input.len();
     let method_seed = derive_seed(&[cell.data_seed, fnv1a64(spec.method.as_bytes())]);
     let mut ctx = RunCtx::new(method_seed)
         .with_budget(budget)
         .with_progress(crate::progress::progress_sink());
-    let (mut steps, oriented) =
-        crate::pipeline::run_pre_steps(&spec.pre, &mut data, shape.as_ref(), cell.data_seed, &ctx)?;
+    let (steps, oriented) = crate::pipeline::run_pre_steps(
+        &spec.pre,
+        &mut data,
+        shape.as_deref(),
+        cell.data_seed,
+        &ctx,
+    )?;
     crate::pipeline::check_input_needs(entry, data.input.normals().is_some(), oriented)
         .map_err(|m| format!("method: {m}"))?;
     let gt = Arc::new(data.gt.clone());
@@ -110,8 +115,11 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
         .build(&spec.params, &env)
         .map_err(|e| format!("method: {e}"))?;
     let opts = metric_options(&spec.metrics).map_err(|e| e.to_string())?;
-    let reference = Reference::analytic(shape.as_ref());
-    let diag = shape.aabb().diagonal();
+    // Without ground truth (a cloud file) only what needs none is measured.
+    let reference = shape.as_deref().map(Reference::analytic);
+    let diag = shape
+        .as_deref()
+        .map_or_else(|| data.input.aabb().diagonal(), |s| s.aabb().diagonal());
     let mut out = Outcome {
         metrics: BTreeMap::new(),
         diagnostics: BTreeMap::new(),
@@ -134,17 +142,20 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             let t = Instant::now();
             out.diagnostics = diagnostics_json(&r.diagnostics);
             let outliers_in = data.is_outlier.iter().filter(|&&o| o).count();
-            crate::pipeline::replace_cloud(&mut data, r, n_in, shape.as_ref())
+            crate::pipeline::replace_cloud(&mut data, r, n_in, shape.as_deref())
                 .map_err(|e| format!("method: {e}"))?;
             let outliers_out = data.is_outlier.iter().filter(|&&o| o).count();
-            let d: Vec<f64> = data
-                .input
-                .positions()
-                .iter()
-                .zip(&data.is_outlier)
-                .filter(|(_, o)| !**o)
-                .map(|(&p, _)| shape.distance(p) / diag)
-                .collect();
+            let d: Vec<f64> = match shape.as_deref() {
+                Some(shape) => data
+                    .input
+                    .positions()
+                    .iter()
+                    .zip(&data.is_outlier)
+                    .filter(|(_, o)| !**o)
+                    .map(|(&p, _)| shape.distance(p) / diag)
+                    .collect(),
+                None => Vec::new(),
+            };
             out.metrics = filter_metrics(n_in, data.input.len(), outliers_in, outliers_out, &d);
             out.dist = Dist::of("point distance (diag)", &d);
             out.metrics_s = t.elapsed().as_secs_f64();
@@ -156,12 +167,13 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
                 .map_err(|e| format!("method: {e}"))?;
             out.method_s = t.elapsed().as_secs_f64();
             let t = Instant::now();
-            let gt_n = gt.normals.as_deref().unwrap_or(&[]);
-            let mut o = opts.normals.clone();
-            o.oriented = o.oriented || r.oriented;
-            let ev = eval_normals(&r.normals, gt_n, &o).map_err(|e| format!("metrics: {e}"))?;
-            out.metrics = keep_metrics(ev.to_row());
-            out.dist = Dist::of("normal angle (deg)", &ev.per_point_deg);
+            if let Some(gt_n) = gt.normals.as_deref() {
+                let mut o = opts.normals.clone();
+                o.oriented = o.oriented || r.oriented;
+                let ev = eval_normals(&r.normals, gt_n, &o).map_err(|e| format!("metrics: {e}"))?;
+                out.metrics = keep_metrics(ev.to_row());
+                out.dist = Dist::of("normal angle (deg)", &ev.per_point_deg);
+            }
             out.metrics_s = t.elapsed().as_secs_f64();
             out.diagnostics = diagnostics_json(&r.diagnostics);
         }
@@ -180,6 +192,16 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             }
             let t = Instant::now();
             let detected: Vec<bool> = r.labels.iter().map(|&c| c != FeatureClass::None).collect();
+            let Some(reference) = &reference else {
+                out.metrics = BTreeMap::from([(
+                    "detected".to_string(),
+                    detected.iter().filter(|&&d| d).count() as f64,
+                )]);
+                out.metrics_s = t.elapsed().as_secs_f64();
+                out.diagnostics = diagnostics_json(&r.diagnostics);
+                out.phases = ctx.phases();
+                return Ok(finish(out, spec, steps, n_input));
+            };
             let curves = reference.feature_curves(opts.features.feature_angle_deg);
             let ev = eval_features(
                 data.input.positions(),
@@ -211,7 +233,14 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             let t = Instant::now();
             let mut o = opts.mesh.clone();
             o.distance.vertex_error = true;
-            let ev = eval_mesh(&r.mesh, &reference, &o).map_err(|e| format!("metrics: {e}"))?;
+            let Some(reference) = &reference else {
+                out.metrics = keep_metrics(without_ground_truth(&r.mesh, &o));
+                out.metrics_s = t.elapsed().as_secs_f64();
+                out.diagnostics = diagnostics_json(&r.diagnostics);
+                out.phases = ctx.phases();
+                return Ok(finish(out, spec, steps, n_input));
+            };
+            let ev = eval_mesh(&r.mesh, reference, &o).map_err(|e| format!("metrics: {e}"))?;
             out.metrics = keep_metrics(ev.to_row());
             // Refused points against the generator's outliers (seed 001 §4.4).
             let re = reconbench_metrics::eval_refused(&r.refused, &data.is_outlier)
@@ -226,11 +255,11 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             }
             let verr: Vec<f64> = match &ev.distance.vertex_error {
                 Some(v) if v.len() == r.mesh.n_vertices() => v.iter().map(|x| x / diag).collect(),
-                _ => r
-                    .mesh
-                    .vertices()
-                    .iter()
-                    .map(|&p| shape.distance(p) / diag)
+                _ => reference
+                    .distances(r.mesh.vertices())
+                    .map_err(|e| format!("metrics: {e}"))?
+                    .into_iter()
+                    .map(|x| x / diag)
                     .collect(),
             };
             out.dist = Dist::of("vertex distance (diag)", &verr);
@@ -245,11 +274,37 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
         }
     }
     out.phases = ctx.phases();
+    Ok(finish(out, spec, steps, n_input))
+}
+
+/// Records the pipeline's step times (the last step's too) in the outcome, and for data
+/// read from a file (whose size is not in its spec) the input's point count as the
+/// metric `input_points`.
+fn finish(
+    mut out: Outcome,
+    spec: &crate::experiment::CellSpec,
+    mut steps: Vec<(String, f64)>,
+    n_input: usize,
+) -> Outcome {
+    if spec.data.file.is_some() {
+        out.metrics.insert("input_points".into(), n_input as f64);
+    }
     if !spec.pre.is_empty() {
         steps.push((spec.method.clone(), out.method_s));
         out.steps = steps;
     }
-    Ok(out)
+    out
+}
+
+/// What a reconstruction is measured by without ground truth: its topology and the
+/// quality of its triangles.
+fn without_ground_truth(
+    mesh: &reconbench_geom::TriMesh,
+    o: &reconbench_metrics::MeshEvalOptions,
+) -> BTreeMap<String, f64> {
+    let mut row = reconbench_metrics::eval_topology(mesh, None, &o.topology).to_row();
+    row.extend(reconbench_metrics::eval_quality(mesh, &o.quality).to_row());
+    row
 }
 
 /// Metrics of a filter's output cloud: distances of its non-outlier points to the

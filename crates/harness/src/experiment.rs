@@ -33,6 +33,7 @@ use serde_json::{Map, Value};
 
 use crate::error::{HarnessError, Result};
 pub use crate::inputs::DataSpec;
+use crate::inputs::{FileInput, FileKind};
 use crate::key::{derive_seed, hash_value, hex_key};
 use crate::pipeline::{self, StepSpec};
 use crate::registry::{self, MethodEntry, MethodKind};
@@ -64,20 +65,48 @@ impl Seeds {
     }
 }
 
-/// One `[[datasets]]` entry.
+/// One `[[datasets]]` entry: exactly one of `shape` (an analytic shape), `real` (a
+/// vendored real set), `mesh` (a mesh file) or `cloud` (a point-cloud file, no ground
+/// truth). File paths are relative to the experiment file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DatasetEntry {
-    /// Label in tables and plots (default: the shape spec).
+    /// Label in tables and plots (default: the shape spec, real set name or file name).
     #[serde(default)]
     pub name: Option<String>,
     /// Shape spec, e.g. `torus:R=0.5,r=0.2` (see `reconbench shapes`).
-    pub shape: String,
+    #[serde(default)]
+    pub shape: Option<String>,
+    /// A vendored real set (`reconbench datasets`), e.g. `fandisk`.
+    #[serde(default)]
+    pub real: Option<String>,
+    /// A mesh file (any format `reconbench info` reads); the mesh is the ground truth.
+    #[serde(default)]
+    pub mesh: Option<String>,
+    /// A point-cloud file, used as the input as is; there is no ground truth.
+    #[serde(default)]
+    pub cloud: Option<String>,
+    /// For `real` and `mesh`: `vertices` (the mesh's own vertices, de-duplicated; the
+    /// default), `sample` (the sampler, `points` points) or `scan` (the virtual scanner).
+    /// For `shape`: `sample` (default) or `scan`.
+    #[serde(default)]
+    pub input: Option<String>,
+    /// Scan spec for `input = "scan"` (`views=6,res=64`, see `reconbench gen --help`).
+    #[serde(default)]
+    pub scan: Option<String>,
+    /// Sharp-edge threshold of a mesh ground truth, degrees (30).
+    #[serde(default)]
+    pub feature_angle_deg: Option<f64>,
+    /// Declared closedness of a mesh ground truth (a real set: the seed's
+    /// `thesis_closed`; a mesh: as measured).
+    #[serde(default)]
+    pub closed: Option<bool>,
     /// Sampler spec (default `uniform`).
     #[serde(default = "default_sampler")]
     pub sampler: String,
-    /// Number of points; a list expands.
-    pub points: toml::Value,
+    /// Number of points for sampled inputs; a list expands.
+    #[serde(default)]
+    pub points: Option<toml::Value>,
 }
 
 fn default_sampler() -> String {
@@ -193,6 +222,11 @@ pub struct Expect {
     /// Tolerance: `rel:0.05` (default) or `abs:0.001`.
     #[serde(default = "default_expect_tol")]
     pub tol: String,
+    /// Why the reproduction differs when it misses (a substitution, a known deviation,
+    /// a page of `docs/methods/`); shown next to the miss, and a miss without one is
+    /// reported as unexplained.
+    #[serde(default)]
+    pub note: String,
 }
 
 fn default_expect_tol() -> String {
@@ -324,7 +358,8 @@ impl Experiment {
             .and_then(|s| s.to_str())
             .unwrap_or("experiment")
             .to_string();
-        let mut exp = Self::parse(&text, &stem)
+        let base = path.parent().filter(|p| !p.as_os_str().is_empty());
+        let mut exp = Self::parse_at(&text, &stem, base)
             .map_err(|e| HarnessError::input(format!("{}: {e}", path.display())))?;
         exp.path = Some(path.to_path_buf());
         Ok(exp)
@@ -332,6 +367,12 @@ impl Experiment {
 
     /// Parses and expands experiment text; `default_name` is used when it has no name.
     pub fn parse(text: &str, default_name: &str) -> Result<Self> {
+        Self::parse_at(text, default_name, None)
+    }
+
+    /// [`parse`](Self::parse) with file paths resolved against `base` (default: the
+    /// current directory).
+    pub fn parse_at(text: &str, default_name: &str, base: Option<&Path>) -> Result<Self> {
         let file: ExperimentFile =
             toml::from_str(text).map_err(|e| HarnessError::input(e.to_string()))?;
         let name = file
@@ -353,7 +394,8 @@ impl Experiment {
                 "timeout must be > 0 seconds, got {timeout_s}"
             )));
         }
-        let (cells, swept) = expand(&file)?;
+        let cwd = std::env::current_dir().unwrap_or_default();
+        let (cells, swept) = expand(&file, base.unwrap_or(&cwd))?;
         validate_report(&file.report, &swept)?;
         Ok(Self {
             name,
@@ -444,7 +486,7 @@ fn fmt_value(v: &Value) -> String {
     }
 }
 
-fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
+fn expand(file: &ExperimentFile, base: &Path) -> Result<(Vec<Cell>, Vec<String>)> {
     if file.datasets.is_empty() {
         return Err(HarnessError::input("no [[datasets]]: add at least one"));
     }
@@ -458,7 +500,7 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
     let metrics = Value::Object(to_json(&file.metrics));
     metric_spec::validate_metric_options(&metrics)?;
 
-    let datasets = expand_datasets(file)?;
+    let datasets = expand_datasets(file, base)?;
     let (perturbs, swept_all) = expand_perturbations(file)?;
     // Methods x params.
     let mut methods = Vec::new();
@@ -481,47 +523,200 @@ fn expand(file: &ExperimentFile) -> Result<(Vec<Cell>, Vec<String>)> {
     Ok((cells, swept_all))
 }
 
-/// One expanded dataset: label, shape spec, sampler spec, point count.
-type DatasetConfig = (String, String, String, u64);
+/// One expanded dataset: its label and data spec (without perturbations).
+type DatasetConfig = (String, DataSpec);
 
-/// Expands the `[[datasets]]` over their point counts.
-fn expand_datasets(file: &ExperimentFile) -> Result<Vec<DatasetConfig>> {
+/// Expands the `[[datasets]]` over their point counts; file paths are resolved against
+/// `base` (the experiment file's directory).
+fn expand_datasets(file: &ExperimentFile, base: &Path) -> Result<Vec<DatasetConfig>> {
     let mut datasets = Vec::new();
     for (i, d) in file.datasets.iter().enumerate() {
-        inputs::validate_data(&d.shape, &d.sampler)
-            .map_err(|e| HarnessError::input(format!("datasets[{i}]: {e}")))?;
-        let points: Vec<u64> = match &d.points {
-            toml::Value::Integer(n) => vec![*n as u64],
-            toml::Value::Array(a) => a
-                .iter()
-                .map(|v| v.as_integer().filter(|&n| n > 0).map(|n| n as u64))
-                .collect::<Option<Vec<_>>>()
-                .ok_or_else(|| {
-                    HarnessError::input(format!("datasets[{i}].points: expected positive integers"))
-                })?,
-            other => {
-                return Err(HarnessError::input(format!(
-                    "datasets[{i}].points: expected an integer or a list, got {other}"
+        let at = |e: HarnessError| HarnessError::input(format!("datasets[{i}]: {e}"));
+        let (label, base_spec, sampled) = dataset_base(d, base).map_err(at)?;
+        let points: Vec<u64> = match (&d.points, sampled) {
+            (None, true) => {
+                return Err(at(HarnessError::input(
+                    "points: required for a sampled input (or use input = \"scan\")",
                 )));
             }
+            (Some(_), false) => {
+                return Err(at(HarnessError::input(
+                    "points: not used by this input (its points are the file's or the scanner's); remove it",
+                )));
+            }
+            (None, false) => vec![0],
+            (Some(v), true) => parse_points(v).map_err(at)?,
         };
-        if points.is_empty() || points.contains(&0) {
-            return Err(HarnessError::input(format!(
-                "datasets[{i}].points: need positive counts"
-            )));
-        }
-        let label = d.name.clone().unwrap_or_else(|| d.shape.clone());
         for &p in &points {
             let label = if points.len() > 1 {
                 format!("{label} n={p}")
             } else {
                 label.clone()
             };
-            datasets.push((label, d.shape.clone(), d.sampler.clone(), p));
+            let mut spec = base_spec.clone();
+            spec.points = p;
+            datasets.push((label, spec));
         }
     }
-
     Ok(datasets)
+}
+
+fn parse_points(v: &toml::Value) -> Result<Vec<u64>> {
+    let points: Vec<u64> = match v {
+        toml::Value::Integer(n) if *n > 0 => vec![*n as u64],
+        toml::Value::Array(a) => a
+            .iter()
+            .map(|v| v.as_integer().filter(|&n| n > 0).map(|n| n as u64))
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(|| HarnessError::input("points: expected positive integers"))?,
+        other => {
+            return Err(HarnessError::input(format!(
+                "points: expected a positive integer or a list, got {other}"
+            )));
+        }
+    };
+    if points.is_empty() {
+        return Err(HarnessError::input("points: need at least one count"));
+    }
+    Ok(points)
+}
+
+/// A dataset entry's label and data spec (points unset), and whether it samples (so
+/// needs `points`).
+fn dataset_base(d: &DatasetEntry, base: &Path) -> Result<(String, DataSpec, bool)> {
+    let given: Vec<&str> = [
+        ("shape", &d.shape),
+        ("real", &d.real),
+        ("mesh", &d.mesh),
+        ("cloud", &d.cloud),
+    ]
+    .iter()
+    .filter(|(_, v)| v.is_some())
+    .map(|(k, _)| *k)
+    .collect();
+    if given.len() != 1 {
+        return Err(HarnessError::input(format!(
+            "give exactly one of shape, real, mesh, cloud (got {})",
+            if given.is_empty() {
+                "none".to_string()
+            } else {
+                given.join(", ")
+            }
+        )));
+    }
+    let file_like = d.shape.is_none();
+    let (default_input, allowed): (&str, &[&str]) = if d.shape.is_some() {
+        ("sample", &["sample", "scan"])
+    } else if d.cloud.is_some() {
+        ("file", &["file"])
+    } else {
+        ("vertices", &["vertices", "sample", "scan"])
+    };
+    let input = d.input.clone().unwrap_or_else(|| default_input.to_string());
+    if !allowed.contains(&input.as_str()) {
+        return Err(HarnessError::input(format!(
+            "input = '{input}': valid here: {}",
+            allowed.join(", ")
+        )));
+    }
+    if d.scan.is_some() && input != "scan" {
+        return Err(HarnessError::input("scan: only used with input = \"scan\""));
+    }
+    if (!file_like || d.cloud.is_some()) && (d.feature_angle_deg.is_some() || d.closed.is_some()) {
+        return Err(HarnessError::input(
+            "feature_angle_deg and closed describe a mesh ground truth: only for real or mesh",
+        ));
+    }
+    let feature_angle_deg = d.feature_angle_deg.unwrap_or(30.0);
+    if !(feature_angle_deg.is_finite() && feature_angle_deg > 0.0 && feature_angle_deg < 180.0) {
+        return Err(HarnessError::input(format!(
+            "feature_angle_deg = {feature_angle_deg}: must be in (0, 180)"
+        )));
+    }
+    let sampler = if input == "vertices" {
+        "vertices".to_string()
+    } else {
+        d.sampler.clone()
+    };
+    let scan = (input == "scan").then(|| d.scan.clone().unwrap_or_default());
+    inputs::validate_data(d.shape.as_deref(), &sampler, scan.as_deref())?;
+    let (shape, label, file) = if let Some(shape) = &d.shape {
+        (shape.clone(), shape.clone(), None)
+    } else if let Some(name) = &d.real {
+        let manifest = reconbench_synth::real::Manifest::locate(Some(base))
+            .map_err(|e| HarnessError::input(format!("real = '{name}': {e}")))?;
+        let set = manifest
+            .find(name)
+            .map_err(|e| HarnessError::input(e.to_string()))?;
+        if set.kind != reconbench_synth::real::RealKind::Mesh {
+            return Err(HarnessError::input(format!(
+                "real = '{name}' is a point cloud without ground truth: use cloud = \"{}\"",
+                manifest.path_of(set).display()
+            )));
+        }
+        let path = manifest.path_of(set);
+        let file = FileInput {
+            kind: FileKind::Real,
+            hash: inputs::file_hash(&path)?,
+            path: path.display().to_string(),
+            feature_angle_deg,
+            closed: Some(d.closed.unwrap_or(set.thesis_closed)),
+        };
+        (format!("real:{name}"), name.clone(), Some(file))
+    } else {
+        let (kind, given) = match (&d.mesh, &d.cloud) {
+            (Some(m), _) => (FileKind::Mesh, m),
+            (None, Some(c)) => (FileKind::Cloud, c),
+            (None, None) => return Err(HarnessError::input("no data source")),
+        };
+        let path = base.join(given);
+        if !path.is_file() {
+            return Err(HarnessError::input(format!(
+                "{} = '{given}': no such file ({})",
+                if kind == FileKind::Mesh {
+                    "mesh"
+                } else {
+                    "cloud"
+                },
+                path.display()
+            )));
+        }
+        let label = Path::new(given)
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or(given)
+            .to_string();
+        let file = FileInput {
+            kind,
+            hash: inputs::file_hash(&path)?,
+            path: path.display().to_string(),
+            feature_angle_deg,
+            closed: if kind == FileKind::Mesh {
+                d.closed
+            } else {
+                None
+            },
+        };
+        let prefix = if kind == FileKind::Mesh {
+            "mesh"
+        } else {
+            "cloud"
+        };
+        (format!("{prefix}:{given}"), label, Some(file))
+    };
+    let spec = DataSpec {
+        shape,
+        sampler: if input == "file" {
+            "file".into()
+        } else {
+            sampler
+        },
+        points: 0,
+        perturb: BTreeMap::new(),
+        scan,
+        file,
+    };
+    Ok((d.name.clone().unwrap_or(label), spec, input == "sample"))
 }
 
 /// One expanded perturbation setting: label and resolved values.
@@ -579,6 +774,19 @@ fn expand_perturbations(file: &ExperimentFile) -> Result<(Vec<PerturbConfig>, Ve
     Ok((perturbs, swept_all))
 }
 
+/// What a key hashes of a serialized spec: everything but where a data file is (its
+/// content hash stays), so a moved checkout keeps its keys.
+fn key_view(mut v: Value) -> Value {
+    let data = match v.get_mut("data") {
+        Some(d) => d,
+        None => &mut v,
+    };
+    if let Some(Value::Object(f)) = data.get_mut("file") {
+        f.remove("path");
+    }
+    v
+}
+
 /// The grid: datasets x perturbations x methods x seeds, each cell keyed by its spec.
 fn grid_cells(
     file: &ExperimentFile,
@@ -590,15 +798,16 @@ fn grid_cells(
 ) -> Vec<Cell> {
     let salt = key_salt();
     let mut cells = Vec::new();
-    for (dlabel, shape, sampler, points) in datasets {
+    for (dlabel, base_data) in datasets {
         for (plabel, perturb) in perturbs {
             let data = DataSpec {
-                shape: shape.clone(),
-                sampler: sampler.clone(),
-                points: *points,
                 perturb: perturb.clone(),
+                ..base_data.clone()
             };
-            let data_hash = hash_value(&salt, &serde_json::to_value(&data).unwrap_or(Value::Null));
+            let data_hash = hash_value(
+                &salt,
+                &key_view(serde_json::to_value(&data).unwrap_or(Value::Null)),
+            );
             for (mlabel, entry, params, pre) in methods {
                 for &s in seeds {
                     let spec = CellSpec {
@@ -611,7 +820,7 @@ fn grid_cells(
                         seed_index: s,
                         metrics: metrics.clone(),
                     };
-                    let v = serde_json::to_value(&spec).unwrap_or(Value::Null);
+                    let v = key_view(serde_json::to_value(&spec).unwrap_or(Value::Null));
                     let key = hex_key(hash_value(&salt, &v));
                     let mut cv = v;
                     if let Value::Object(o) = &mut cv {

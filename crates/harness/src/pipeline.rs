@@ -103,7 +103,7 @@ fn step_seed(data_seed: u64, method: &str, i: usize) -> u64 {
 pub fn run_pre_steps(
     pre: &[StepSpec],
     data: &mut Generated,
-    shape: &dyn Shape,
+    shape: Option<&dyn Shape>,
     data_seed: u64,
     ctx: &RunCtx,
 ) -> std::result::Result<(StepTimes, Option<bool>), String> {
@@ -167,11 +167,11 @@ pub fn replace_cloud(
     data: &mut Generated,
     out: Filtered,
     n_in: usize,
-    shape: &dyn Shape,
+    shape: Option<&dyn Shape>,
 ) -> std::result::Result<(), String> {
     let m = out.cloud.len();
-    match &out.source {
-        Some(src) => {
+    match (&out.source, shape) {
+        (Some(src), _) => {
             if src.len() != m {
                 return Err(format!(
                     "{} source indices for {m} output points",
@@ -188,7 +188,14 @@ pub fn replace_cloud(
             data.clean = pick(&data.clean, src);
             data.is_outlier = pick(&data.is_outlier, src);
         }
-        None => {
+        (None, None) => {
+            // A cloud without ground truth: nothing to carry along.
+            data.clean = out.cloud.positions().to_vec();
+            data.gt.normals = None;
+            data.gt.feature_distance = None;
+            data.is_outlier = vec![false; m];
+        }
+        (None, Some(shape)) => {
             let hits: Vec<_> = out
                 .cloud
                 .positions()

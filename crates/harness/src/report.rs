@@ -12,6 +12,7 @@ use crate::aggregate::{Group, aggregate};
 use crate::compare::Tol;
 use crate::error::{HarnessError, Result};
 use crate::experiment::{Expect, Experiment, ReportOptions};
+use crate::inputs::FileKind;
 use crate::plots::{BoxPlot, LinePlot, Plot, Series, loglog_slope};
 use crate::registry::MethodKind;
 use crate::runner::Manifest;
@@ -39,6 +40,9 @@ pub struct ExpectResult {
     pub tol: String,
     /// Within tolerance.
     pub pass: bool,
+    /// Why it may miss (the expectation's `note`).
+    #[serde(default)]
+    pub note: String,
 }
 
 /// What `write_report` produced.
@@ -91,6 +95,14 @@ pub fn load_results(path: &Path) -> Result<(Vec<Row>, Option<Experiment>, Option
         .and_then(|m| m.file_text.as_ref().map(|t| (t, m.experiment.clone())))
         .and_then(|(t, name)| Experiment::parse(t, &name).ok());
     Ok((rows, exp, manifest))
+}
+
+/// Input size of a group: the spec's point count, or for data read from a file the
+/// measured `input_points`.
+fn group_points(g: &Group) -> u64 {
+    g.metrics
+        .get("input_points")
+        .map_or(g.data.points, |s| s.mean.round() as u64)
 }
 
 fn slug(s: &str) -> String {
@@ -173,6 +185,7 @@ pub fn check_expectations(expect: &[Expect], groups: &[Group]) -> Result<Vec<Exp
             source: e.source.clone(),
             tol: tol.to_string(),
             pass: reproduced.is_some_and(|r| tol.within(e.value, r)),
+            note: e.note.clone(),
         });
     }
     Ok(out)
@@ -221,6 +234,7 @@ pub fn write_report(
         Some(e) => check_expectations(&e.file.expect, &groups)?,
         None => Vec::new(),
     };
+    write_data(&mut md, &groups);
     write_expectations(&mut md, &expect);
 
     let mut table_files = Vec::new();
@@ -315,6 +329,96 @@ fn write_expectations(md: &mut String, expect: &[ExpectResult]) {
         );
     }
     md.push('\n');
+    if misses == 0 {
+        return;
+    }
+    // Grouped by explanation, so that one cause shared by many rows is said once.
+    let mut by_note: BTreeMap<&str, Vec<String>> = BTreeMap::new();
+    for e in expect.iter().filter(|e| !e.pass) {
+        by_note
+            .entry(e.note.trim())
+            .or_default()
+            .push(format!("{} / {}", e.selector, e.metric));
+    }
+    md.push_str("Why the misses:\n\n");
+    for (note, cells) in by_note {
+        let why = if note.is_empty() {
+            "**unexplained** (no `note` in the experiment file)"
+        } else {
+            note
+        };
+        let _ = writeln!(md, "- {why} ({}: {})", cells.len(), cells.join("; "));
+    }
+    md.push('\n');
+}
+
+/// The data of an experiment that reads files: per dataset its source, input, size and
+/// ground truth (nothing for purely analytic experiments, whose specs say it all).
+fn write_data(md: &mut String, groups: &[Group]) {
+    if groups.iter().all(|g| g.data.file.is_none()) {
+        return;
+    }
+    let mut seen = BTreeSet::new();
+    let mut lines = Vec::new();
+    let mut without_gt = Vec::new();
+    for g in groups {
+        if !seen.insert(g.labels.dataset.clone()) {
+            continue;
+        }
+        let (source, truth) = match &g.data.file {
+            None => (
+                format!("shape `{}`", g.data.shape),
+                "analytic shape".to_string(),
+            ),
+            Some(f) => {
+                let file = Path::new(&f.path)
+                    .file_name()
+                    .map_or_else(|| f.path.clone(), |n| n.to_string_lossy().into_owned());
+                let truth = match (f.kind, f.closed) {
+                    (FileKind::Cloud, _) => {
+                        without_gt.push(g.labels.dataset.clone());
+                        "none".to_string()
+                    }
+                    (_, Some(c)) => format!(
+                        "the mesh (sharp edges >= {} deg; closed declared {c})",
+                        f.feature_angle_deg
+                    ),
+                    (_, None) => format!("the mesh (sharp edges >= {} deg)", f.feature_angle_deg),
+                };
+                (
+                    format!("{} `{file}`", g.data.shape.split(':').next().unwrap_or("")),
+                    truth,
+                )
+            }
+        };
+        let input = match (&g.data.scan, g.data.sampler.as_str()) {
+            (Some(s), _) => format!("scan `{s}`"),
+            (None, "vertices") => "mesh vertices".into(),
+            (None, "file") => "the file's points".into(),
+            (None, s) => format!("sampler `{s}`"),
+        };
+        lines.push(format!(
+            "| {} | {source} | {input} | {} | {truth} |",
+            g.labels.dataset,
+            group_points(g)
+        ));
+    }
+    md.push_str(
+        "## Data\n\n| dataset | source | input | points | ground truth |\n|---|---|---|---:|---|\n",
+    );
+    for l in lines {
+        md.push_str(&l);
+        md.push('\n');
+    }
+    md.push('\n');
+    if !without_gt.is_empty() {
+        let _ = writeln!(
+            md,
+            "{} {} no ground truth: the metrics that need the true surface (distances, normal and feature errors, Delta F, topology_ok) are absent there (–), not zero; topology, triangle quality, time and memory are measured.\n",
+            without_gt.join(", "),
+            if without_gt.len() == 1 { "has" } else { "have" }
+        );
+    }
 }
 
 /// One method kind's section: its table (and table files) and plots. Returns the table
@@ -464,7 +568,7 @@ fn kind_plots(
                 for g in gs.iter().filter(|g| &g.labels.dataset == d) {
                     let Some(s) = g.metrics.get(m) else { continue };
                     let xv = if x == "points" {
-                        g.data.points as f64
+                        group_points(g) as f64
                     } else {
                         g.data.perturb.get(x).and_then(Value::as_f64).unwrap_or(0.0)
                     };
@@ -513,15 +617,15 @@ fn kind_plots(
             }
         }
     }
-    // Time vs size (log-log) when sizes vary.
-    let sizes: BTreeSet<u64> = gs.iter().map(|g| g.data.points).collect();
+    // Time vs size (log-log) when sizes vary (files: their measured size).
+    let sizes: BTreeSet<u64> = gs.iter().map(|g| group_points(g)).collect();
     if sizes.len() > 1 {
         let mut per: BTreeMap<String, BTreeMap<u64, Vec<f64>>> = BTreeMap::new();
         for g in &gs {
             if let Some(s) = g.cost.get("method_s") {
                 per.entry(g.labels.method.clone())
                     .or_default()
-                    .entry(g.data.points)
+                    .entry(group_points(g))
                     .or_default()
                     .push(s.mean);
             }

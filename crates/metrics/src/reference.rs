@@ -307,36 +307,17 @@ pub(crate) fn aabb_of_referenced(mesh: &TriMesh) -> Aabb {
 }
 
 /// Manifold edges (exactly two faces of non-zero area) whose unit face normals differ by
-/// at least `min_angle_deg` (unoriented faces are compared as given: a flipped neighbour
-/// reads as a 180 degree crease). Returns `(a, b, angle_deg)` per edge.
+/// at least `min_angle_deg` (see [`topology::sharp_edges`]). Returns `(a, b, angle_deg)`
+/// per edge.
 pub(crate) fn mesh_sharp_edges(
     mesh: &TriMesh,
     topo: &MeshTopology,
     min_angle_deg: f64,
 ) -> Vec<(DVec3, DVec3, f64)> {
     let v = mesh.vertices();
-    (0..topo.n_edges())
-        .into_par_iter()
-        .filter_map(|e| {
-            let fs = topo.edge_faces(e);
-            if fs.len() != 2 {
-                return None;
-            }
-            let (n1, n2) = (
-                mesh.face_normal(fs[0] as usize),
-                mesh.face_normal(fs[1] as usize),
-            );
-            if n1 == DVec3::ZERO || n2 == DVec3::ZERO {
-                return None;
-            }
-            let ang = n1.dot(n2).clamp(-1.0, 1.0).acos().to_degrees();
-            if ang >= min_angle_deg {
-                let [a, b] = topo.edges()[e];
-                Some((v[a as usize], v[b as usize], ang))
-            } else {
-                None
-            }
-        })
+    topology::sharp_edges(mesh, topo, min_angle_deg)
+        .into_iter()
+        .map(|e| (v[e.v[0] as usize], v[e.v[1] as usize], e.angle_deg))
         .collect()
 }
 

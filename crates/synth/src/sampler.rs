@@ -76,6 +76,9 @@ pub enum SamplerSpec {
         #[serde(default)]
         nv: Option<usize>,
     },
+    /// The shape's own vertices (a mesh: de-duplicated, with area-weighted vertex
+    /// normals); the point count is not used.
+    Vertices,
     /// PCPNet-like density gradient ("simulating distance from the sensor"): keep
     /// probability rises linearly from `min` to 1 along `axis` over the bounding box.
     Gradient {
@@ -111,7 +114,7 @@ fn default_stripes() -> usize {
     5
 }
 
-const SAMPLER_NAMES: &str = "uniform, blue-noise, grid, gradient, stripes";
+const SAMPLER_NAMES: &str = "uniform, blue-noise, grid, vertices, gradient, stripes";
 
 impl FromStr for SamplerSpec {
     type Err = SynthError;
@@ -122,6 +125,7 @@ impl FromStr for SamplerSpec {
             "uniform" => &[],
             "blue-noise" => &["oversample"],
             "grid" => &["nu", "nv"],
+            "vertices" => &[],
             "gradient" => &["min", "axis"],
             "stripes" => &["count", "min", "axis"],
             _ => {
@@ -136,6 +140,7 @@ impl FromStr for SamplerSpec {
             "uniform" => SamplerSpec::Uniform,
             "blue-noise" => SamplerSpec::BlueNoise { oversample: 5.0 },
             "grid" => SamplerSpec::Grid { nu: None, nv: None },
+            "vertices" => SamplerSpec::Vertices,
             "gradient" => SamplerSpec::Gradient { min: 0.1, axis: 0 },
             _ => SamplerSpec::Stripes {
                 count: 5,
@@ -190,6 +195,7 @@ impl fmt::Display for SamplerSpec {
                     .into_iter()
                     .chain(nv.map(|x| ("nv", x.to_string()))),
             ),
+            SamplerSpec::Vertices => "vertices".to_string(),
             SamplerSpec::Gradient { min, axis } => format_kv(
                 "gradient",
                 [("min", fmt_f64(*min)), ("axis", axis.to_string())],
@@ -238,6 +244,15 @@ pub fn sample(
     seed: u64,
 ) -> Result<GroundTruthCloud> {
     spec.validate()?;
+    if *spec == SamplerSpec::Vertices {
+        let samples = shape.vertex_samples().ok_or_else(|| {
+            SynthError::Unsatisfiable(format!(
+                "shape '{}' has no vertices: the vertices sampler needs a mesh",
+                shape.name()
+            ))
+        })?;
+        return Ok(from_samples(shape, &samples));
+    }
     let n = density.count(shape)?;
     let samples = match *spec {
         SamplerSpec::Uniform => shape.sample_uniform(n, &mut rng_for(seed, "uniform", 0)),
@@ -253,6 +268,7 @@ pub fn sample(
                     ))
                 })?
         }
+        SamplerSpec::Vertices => unreachable!("handled above"),
         SamplerSpec::Gradient { min, axis } => {
             let b = shape.aabb();
             let a = axis_vec(axis);

@@ -168,6 +168,11 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         let _ = (nu, nv);
         None
     }
+    /// The shape's own vertices as samples (a mesh's; `None` for analytic shapes), for
+    /// the `vertices` sampler.
+    fn vertex_samples(&self) -> Option<Vec<Sample>> {
+        None
+    }
     /// Grid dimensions for about `count` grid points (square root by default).
     fn grid_dims_for_count(&self, count: usize) -> (usize, usize) {
         let n = (count as f64).sqrt().round().max(1.0) as usize;

@@ -38,6 +38,9 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::mesh::TriMesh;
 
+mod sharp;
+pub use sharp::{FeatureChain, SharpEdge, feature_chains, sharp_edges};
+
 /// Marker for "no edge" in [`MeshTopology::face_edges`] (collapsed faces).
 pub const NO_EDGE: u32 = u32::MAX;
 
