@@ -212,8 +212,13 @@ pub struct Expect {
     /// perturbation key, or `params.NAME`; every given key must match.
     #[serde(rename = "where", default)]
     pub select: toml::Table,
-    /// Metric name (as in the tables, e.g. `normals.angle_mean_deg`).
+    /// Metric name (as in the tables, e.g. `normal_mean_deg`), or `time` (the method's
+    /// wall time) or `cost.NAME` (any cost entry, e.g. `cost.peak_rss_mib`).
     pub metric: String,
+    /// When given, the value is a ratio: the selected cells' metric over that of the
+    /// cells this selector picks (same keys as `where`), e.g. a published speed-up.
+    #[serde(default)]
+    pub over: Option<toml::Table>,
     /// The published value.
     pub value: f64,
     /// Where it is published, e.g. `seed 000 Table 4.1`.
@@ -1077,5 +1082,92 @@ mod tests {
         assert_eq!(all, (0..e.cells.len()).collect::<Vec<_>>());
         assert!(parse_shard("3/3").is_err());
         assert_eq!(parse_shard("1/4").unwrap(), (1, 4));
+    }
+
+    fn real_dir() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../datasets/real")
+    }
+
+    fn one_dataset(body: &str, base: &Path) -> Result<Experiment> {
+        let text = format!("[[datasets]]\n{body}\n[[methods]]\nname = \"gt-normals\"\n");
+        Experiment::parse_at(&text, "t", Some(base))
+    }
+
+    #[test]
+    fn file_datasets_resolve_and_check_their_keys() {
+        let base = real_dir();
+        let e = one_dataset("real = \"3holes\"", &base).unwrap();
+        let d = &e.cells[0].spec.data;
+        assert_eq!(d.shape, "real:3holes");
+        assert_eq!(d.sampler, "vertices");
+        assert_eq!(d.points, 0);
+        let f = d.file.as_ref().unwrap();
+        assert_eq!(f.kind, FileKind::Real);
+        assert_eq!(f.closed, Some(true), "the manifest's thesis_closed");
+        assert_eq!(e.cells[0].labels.dataset, "3holes");
+        let sampled = one_dataset(
+            "real = \"fandisk\"\ninput = \"sample\"\npoints = [100, 200]",
+            &base,
+        )
+        .unwrap();
+        assert_eq!(sampled.cells.len(), 2);
+        assert_eq!(sampled.cells[1].labels.dataset, "fandisk n=200");
+        let cloud = one_dataset("cloud = \"cactus.ply\"", &base).unwrap();
+        assert_eq!(cloud.cells[0].spec.data.sampler, "file");
+        // Input errors name what is wrong.
+        for (body, want) in [
+            ("real = \"nope\"", "unknown real data set 'nope'"),
+            ("real = \"cactus\"", "point cloud without ground truth"),
+            ("shape = \"sphere\"\nreal = \"3holes\"", "exactly one of"),
+            ("points = 10", "exactly one of"),
+            ("real = \"3holes\"\npoints = 10", "not used by this input"),
+            ("real = \"3holes\"\ninput = \"sample\"", "points: required"),
+            (
+                "real = \"3holes\"\ninput = \"grid\"",
+                "valid here: vertices, sample, scan",
+            ),
+            ("mesh = \"missing.ply\"", "no such file"),
+            (
+                "shape = \"sphere\"\npoints = 10\nclosed = true",
+                "only for real or mesh",
+            ),
+            (
+                "real = \"3holes\"\nfeature_angle_deg = 0",
+                "must be in (0, 180)",
+            ),
+            (
+                "real = \"3holes\"\nscan = \"views=2\"",
+                "only used with input",
+            ),
+            (
+                "real = \"3holes\"\ninput = \"scan\"\nscan = \"bogus=1\"",
+                "scan",
+            ),
+        ] {
+            let e = one_dataset(body, &base).unwrap_err().to_string();
+            assert!(e.contains(want), "{body}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_mesh_file_keys_by_content_not_by_path() {
+        let src = real_dir().join("3holes.ply");
+        let d = tempfile::tempdir().unwrap();
+        for sub in ["a", "b"] {
+            std::fs::create_dir_all(d.path().join(sub)).unwrap();
+            std::fs::copy(&src, d.path().join(sub).join("m.ply")).unwrap();
+        }
+        let key = |base: &Path| {
+            one_dataset("mesh = \"m.ply\"", base).unwrap().cells[0]
+                .key
+                .clone()
+        };
+        let (ka, kb) = (key(&d.path().join("a")), key(&d.path().join("b")));
+        assert_eq!(ka, kb, "same bytes at another path: same key");
+        let mut bytes = std::fs::read(&src).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        std::fs::write(d.path().join("b").join("m.ply"), bytes).unwrap();
+        assert_ne!(ka, key(&d.path().join("b")), "changed bytes: new key");
     }
 }

@@ -139,7 +139,7 @@ fn group_matches(g: &Group, sel: &toml::Table) -> bool {
             .as_str()
             .is_some_and(|w| w == g.labels.method || w == g.method),
         "shape" => want.as_str() == Some(g.data.shape.as_str()),
-        "points" => value_matches(want, &Value::from(g.data.points)),
+        "points" => value_matches(want, &Value::from(group_points(g))),
         k => {
             if let Some(p) = k.strip_prefix("params.") {
                 g.params.get(p).is_some_and(|v| value_matches(want, v))
@@ -152,29 +152,58 @@ fn group_matches(g: &Group, sel: &toml::Table) -> bool {
     })
 }
 
+/// The per-configuration means of `metric` (or `time`, `cost.NAME`) of the groups a
+/// selector picks.
+fn selected_values(groups: &[Group], sel: &toml::Table, metric: &str) -> Vec<f64> {
+    groups
+        .iter()
+        .filter(|g| group_matches(g, sel))
+        .filter_map(|g| {
+            let stat = match (metric, metric.strip_prefix("cost.")) {
+                ("time", _) => g.cost.get("method_s"),
+                (_, Some(c)) => g.cost.get(c),
+                _ => g.metrics.get(metric),
+            };
+            stat.map(|s| s.mean)
+        })
+        .collect()
+}
+
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+fn selector_text(sel: &toml::Table) -> String {
+    sel.iter()
+        .map(|(k, v)| {
+            format!(
+                "{k}={}",
+                v.as_str().map_or_else(|| v.to_string(), str::to_string)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Evaluates `[[expect]]` entries against aggregated groups.
 pub fn check_expectations(expect: &[Expect], groups: &[Group]) -> Result<Vec<ExpectResult>> {
     let mut out = Vec::new();
     for e in expect {
         let tol = Tol::parse(&e.tol)?;
-        let vals: Vec<f64> = groups
-            .iter()
-            .filter(|g| group_matches(g, &e.select))
-            .filter_map(|g| g.metrics.get(&e.metric).map(|s| s.mean))
-            .collect();
-        let reproduced = (!vals.is_empty()).then(|| vals.iter().sum::<f64>() / vals.len() as f64);
+        let vals = selected_values(groups, &e.select, &e.metric);
+        let mut reproduced = mean(&vals);
+        if let Some(over) = &e.over {
+            let den = mean(&selected_values(groups, over, &e.metric));
+            reproduced = match (reproduced, den) {
+                (Some(n), Some(d)) if d != 0.0 => Some(n / d),
+                _ => None,
+            };
+        }
         let ratio = reproduced.and_then(|r| (e.value != 0.0).then(|| r / e.value));
-        let selector = e
-            .select
-            .iter()
-            .map(|(k, v)| {
-                format!(
-                    "{k}={}",
-                    v.as_str().map_or_else(|| v.to_string(), str::to_string)
-                )
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
+        let mut selector = selector_text(&e.select);
+        if let Some(over) = &e.over {
+            selector = format!("({selector}) over ({})", selector_text(over));
+        }
         out.push(ExpectResult {
             selector,
             metric: e.metric.clone(),
