@@ -410,3 +410,57 @@ fn million_point_binary_ply_is_fast() {
     assert_eq!(back, c);
     assert!(write.as_secs_f64() < 1.0 && read.as_secs_f64() < 1.0);
 }
+
+#[test]
+fn ply_header_comments_round_trip_in_every_encoding_and_through_a_file() {
+    let cloud = rich_cloud(50);
+    let comments = vec![
+        "reconbench-provenance {\"seed\":7,\"sampler\":\"uniform\"}".to_string(),
+        String::new(),
+        "  two leading spaces kept".to_string(),
+    ];
+    for enc in [
+        PlyEncoding::Ascii,
+        PlyEncoding::BinaryLittleEndian,
+        PlyEncoding::BinaryBigEndian,
+    ] {
+        let opts = WriteOptions {
+            ply_encoding: enc,
+            ..WriteOptions::default()
+        };
+        let bytes =
+            io::cloud_to_bytes_with_comments(&cloud, Format::Ply, &opts, &comments).unwrap();
+        let read = io::ply_comments_from_bytes(&bytes, "c.ply").unwrap();
+        assert_eq!(read[0], "written by reconbench (point cloud)", "{enc}");
+        assert_eq!(&read[1..], &comments[..], "{enc}");
+        // The comments do not disturb the data.
+        assert_eq!(
+            cloud_from_bytes(&bytes, Format::Ply, "c.ply").unwrap(),
+            cloud
+        );
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("c.ply");
+    io::write_cloud_with_comments(&ply, &cloud, &comments).unwrap();
+    assert_eq!(&io::read_ply_comments(&ply).unwrap()[1..], &comments[..]);
+    assert_eq!(io::read_cloud(&ply).unwrap(), cloud);
+    // Other formats have no header comments: written without them.
+    let xyz = dir.path().join("c.xyz");
+    io::write_cloud_with_comments(&xyz, &cloud, &comments).unwrap();
+    assert!(io::read_cloud(&xyz).is_ok());
+    // A file that is not PLY is an error naming it; a comment with a line break is refused.
+    let e = io::read_ply_comments(&xyz).unwrap_err().to_string();
+    assert!(e.contains("c.xyz"), "{e}");
+    let e = io::write_cloud_with_comments(&ply, &cloud, &["a\nb".to_string()])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("line break"), "{e}");
+}
+
+#[test]
+fn content_hash_is_fnv1a_64_in_hex() {
+    assert_eq!(io::content_hash(b""), "cbf29ce484222325");
+    assert_eq!(io::content_hash(b"a"), "af63dc4c8601ec8c");
+    assert_eq!(io::content_hash(b"foobar"), "85944171f73967e8");
+}

@@ -78,7 +78,7 @@ pub struct FileInput {
 pub fn file_hash(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path)
         .map_err(|e| HarnessError::input(format!("cannot read {}: {e}", path.display())))?;
-    Ok(format!("{:016x}", crate::key::fnv1a64(&bytes)))
+    Ok(reconbench_geom::io::content_hash(&bytes))
 }
 
 /// Perturbation keys of experiment files, in the order they are applied: the key, the

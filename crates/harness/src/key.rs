@@ -7,15 +7,7 @@
 
 use serde_json::Value;
 
-/// FNV-1a, 64 bit.
-pub fn fnv1a64(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
+pub use reconbench_geom::io::fnv1a64;
 
 /// Canonical JSON text of `v`: object keys sorted, no white space.
 pub fn canonical_json(v: &Value) -> String {

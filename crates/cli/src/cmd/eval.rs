@@ -10,7 +10,7 @@ use reconbench_metrics::{
     Report, Value, eval_cloud_features, eval_cloud_normals, eval_mesh,
 };
 
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, provenance};
 
 /// Arguments of `eval`.
 #[derive(Debug, Args)]
@@ -21,6 +21,10 @@ pub struct EvalArgs {
     /// Ground truth: a shape spec (`torus`, `box`, ...) or a mesh file.
     #[arg(long)]
     reference: String,
+    /// The cloud the mesh was reconstructed from: if `reconbench gen` recorded its
+    /// provenance, it must match --reference.
+    #[arg(long, value_name = "CLOUD")]
+    input: Option<PathBuf>,
     /// Minimum number of area-uniform samples per side (default 100000; at least
     /// 10 x faces are taken).
     #[arg(long)]
@@ -46,7 +50,8 @@ pub struct EvalNormalsArgs {
     /// when --gt-cloud is not given.
     #[arg(long)]
     reference: Option<String>,
-    /// The cloud written by `reconbench gen`: GT normals at each point's source sample.
+    /// The cloud written by `reconbench gen`: GT normals at each point's source sample
+    /// (its recorded provenance must match --reference when both are given).
     #[arg(long)]
     gt_cloud: Option<PathBuf>,
     /// Also report oriented errors and the flip rate.
@@ -66,8 +71,9 @@ pub struct EvalFeaturesArgs {
     /// Ground truth: a shape spec (feature curves come from the shape).
     #[arg(long)]
     reference: String,
-    /// The cloud written by `reconbench gen` (clean positions through source ids);
-    /// without it the cloud's clean_x/y/z channels, else its own positions, are used.
+    /// The cloud written by `reconbench gen` (clean positions through source ids; its
+    /// recorded provenance must match --reference); without it the cloud's
+    /// clean_x/y/z channels, else its own positions, are used.
     #[arg(long)]
     gt_cloud: Option<PathBuf>,
     /// A curve counts when its normal deviation is at least this (degrees).
@@ -100,6 +106,9 @@ fn print_report(r: &impl Report, json: bool) -> CliResult {
 
 /// `reconbench eval`.
 pub fn eval(a: EvalArgs) -> CliResult {
+    if let Some(input) = &a.input {
+        provenance::check(input, &a.reference)?;
+    }
     let mesh = io::read_mesh(&a.mesh).map_err(CliError::input)?;
     let reference = Reference::from_arg(&a.reference).map_err(CliError::input)?;
     let mut opts = MeshEvalOptions::default();
@@ -114,6 +123,9 @@ pub fn eval(a: EvalArgs) -> CliResult {
 
 /// `reconbench eval-normals`.
 pub fn eval_normals(a: EvalNormalsArgs) -> CliResult {
+    if let (Some(g), Some(r)) = (&a.gt_cloud, &a.reference) {
+        provenance::check(g, r)?;
+    }
     let cloud = io::read_cloud(&a.cloud).map_err(CliError::input)?;
     let opts = NormalOptions {
         oriented: a.oriented,
@@ -139,6 +151,9 @@ pub fn eval_normals(a: EvalNormalsArgs) -> CliResult {
 
 /// `reconbench eval-features`.
 pub fn eval_features(a: EvalFeaturesArgs) -> CliResult {
+    if let Some(g) = &a.gt_cloud {
+        provenance::check(g, &a.reference)?;
+    }
     let cloud = io::read_cloud(&a.cloud).map_err(CliError::input)?;
     let reference = Reference::from_arg(&a.reference).map_err(CliError::input)?;
     let gt = a

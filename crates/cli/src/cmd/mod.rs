@@ -1,9 +1,11 @@
 //! Subcommand definitions and dispatch.
 
+mod datasets;
 mod delaunay;
 mod eval;
 mod harness;
 mod info;
+mod provenance;
 mod synth;
 
 use std::fmt::Display;
@@ -67,19 +69,25 @@ enum Command {
     )]
     Convert(info::ConvertArgs),
     /// Generate a ground-truth cloud (positions, GT normals, feature distance, source
-    /// ids) or a reference mesh from a built-in shape.
+    /// ids; its provenance in the PLY header) from a built-in shape or a mesh file, or a
+    /// shape's reference mesh.
     #[command(
-        after_help = "Examples:\n  reconbench gen torus --points 10000 --noise gaussian:sigma=0.002 --seed 1 -o torus.ply\n  reconbench gen double-torus --mesh --resolution 96 -o ref.ply"
+        after_help = "Examples:\n  reconbench gen torus --points 10000 --noise gaussian:sigma=0.002 --seed 1 -o torus.ply\n  reconbench gen double-torus --mesh --resolution 96 -o ref.ply\n  reconbench gen --mesh-input datasets/real/3holes.ply --sampler vertices -o 3holes-pts.ply"
     )]
     Gen(synth::GenArgs),
     /// List the built-in shapes with genus and sharp-feature summary.
     #[command(after_help = "Example:\n  reconbench shapes --json")]
     Shapes(synth::ShapesArgs),
+    /// List the vendored real data sets (datasets/real/) with topology, licence and source.
+    #[command(after_help = "Example:\n  reconbench datasets --json")]
+    Datasets(datasets::DatasetsArgs),
     /// Build the 3D Delaunay tetrahedralization of a cloud and print its statistics.
     #[command(after_help = "Example:\n  reconbench delaunay torus.ply --json")]
     Delaunay(delaunay::DelaunayArgs),
     /// Distances, topology and quality of a reconstructed mesh against ground truth.
-    #[command(after_help = "Example:\n  reconbench eval --mesh out.ply --reference torus --json")]
+    #[command(
+        after_help = "Example:\n  reconbench eval --mesh out.ply --reference torus --input torus.ply --json"
+    )]
     Eval(eval::EvalArgs),
     /// Normal errors of a cloud's normals against ground truth.
     #[command(
@@ -103,6 +111,7 @@ pub fn run(cli: Cli) -> CliResult {
         Command::Convert(a) => info::convert(a),
         Command::Gen(a) => synth::gen_cmd(a),
         Command::Shapes(a) => synth::shapes_cmd(a),
+        Command::Datasets(a) => datasets::datasets(a),
         Command::Delaunay(a) => delaunay::delaunay(a),
         Command::Eval(a) => eval::eval(a),
         Command::EvalNormals(a) => eval::eval_normals(a),

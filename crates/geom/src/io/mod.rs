@@ -25,10 +25,14 @@
 //!
 //! Text formats write `f64` values with the shortest representation that parses back to
 //! the same bits (at most 17 significant digits), so text round trips are exact.
+//!
+//! PLY headers can carry extra `comment` lines ([`write_cloud_with_comments`], read back
+//! with [`read_ply_comments`]), e.g. the provenance of a generated cloud; the other
+//! formats have no such place, and writing to them drops the comments.
 
 use std::fmt;
 use std::fs::{self, File};
-use std::io::{BufWriter, Write};
+use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::Path;
 use std::str::FromStr;
 
@@ -342,6 +346,21 @@ pub fn write_cloud_with(
     write_file(path, &Geometry::from_cloud(cloud), format, options)
 }
 
+/// [`write_cloud`] with extra PLY header comments: each string becomes one
+/// `comment <text>` line after the writer's own comment (a string holding a line break is
+/// refused). Formats other than PLY have no header comments; for them the comments are
+/// not written.
+pub fn write_cloud_with_comments(
+    path: impl AsRef<Path>,
+    cloud: &PointCloud,
+    comments: &[String],
+) -> Result<()> {
+    let path = path.as_ref();
+    let mut g = Geometry::from_cloud(cloud);
+    g.comments = comments;
+    write_file(path, &g, Format::from_path(path)?, &WriteOptions::default())
+}
+
 /// Writes a triangle mesh, choosing the format from the extension, with default options.
 pub fn write_mesh(path: impl AsRef<Path>, mesh: &TriMesh) -> Result<()> {
     let path = path.as_ref();
@@ -371,6 +390,69 @@ pub fn cloud_to_bytes(
     options: &WriteOptions,
 ) -> Result<Vec<u8>> {
     to_bytes(&Geometry::from_cloud(cloud), format, options)
+}
+
+/// Encodes a point cloud in memory with extra PLY header comments (see
+/// [`write_cloud_with_comments`]).
+pub fn cloud_to_bytes_with_comments(
+    cloud: &PointCloud,
+    format: Format,
+    options: &WriteOptions,
+    comments: &[String],
+) -> Result<Vec<u8>> {
+    let mut g = Geometry::from_cloud(cloud);
+    g.comments = comments;
+    to_bytes(&g, format, options)
+}
+
+/// The `comment` lines of a PLY file's header, in order, without the keyword (and the
+/// one separating space). Reads and checks the header only, not the data after it.
+pub fn read_ply_comments(path: impl AsRef<Path>) -> Result<Vec<String>> {
+    let path = path.as_ref();
+    let file = File::open(path).map_err(io_err(path))?;
+    let mut r = BufReader::new(file);
+    let mut header = Vec::new();
+    loop {
+        let start = header.len();
+        if r.read_until(b'\n', &mut header).map_err(io_err(path))? == 0 {
+            break;
+        }
+        let line = header[start..].trim_ascii();
+        if line == b"end_header" || (start == 0 && line != b"ply") {
+            break;
+        }
+    }
+    ply_comments_from_bytes(&header, path)
+}
+
+/// [`read_ply_comments`] from memory (the header, or the whole file); `name` is the path
+/// reported in errors.
+pub fn ply_comments_from_bytes(bytes: &[u8], name: impl AsRef<Path>) -> Result<Vec<String>> {
+    let path = name.as_ref();
+    if bytes.is_empty() {
+        return Err(format_err(
+            path,
+            Location::File,
+            "the file is empty; expected ply data",
+        ));
+    }
+    ply::header_comments(bytes, path)
+}
+
+/// Content hash of a file's bytes: FNV-1a 64, as 16 hex digits. Used to tie a generated
+/// cloud to the mesh it came from (and cell keys to their data files).
+pub fn content_hash(bytes: &[u8]) -> String {
+    format!("{:016x}", fnv1a64(bytes))
+}
+
+/// FNV-1a, 64 bit: a hash that does not depend on the platform or the Rust release.
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
 }
 
 /// Encodes a triangle mesh in memory (see [`write_mesh_with`]).
@@ -489,6 +571,8 @@ pub(crate) struct Geometry<'a> {
     pub channels: Vec<(&'a str, &'a Channel)>,
     /// `None` for a point cloud.
     pub faces: Option<&'a [[u32; 3]]>,
+    /// Extra header comment lines (PLY only).
+    pub comments: &'a [String],
 }
 
 impl<'a> Geometry<'a> {
@@ -500,6 +584,7 @@ impl<'a> Geometry<'a> {
             source_ids: c.source_ids(),
             channels: c.channels().iter().map(|(k, v)| (k.as_str(), v)).collect(),
             faces: None,
+            comments: &[],
         }
     }
 
@@ -511,6 +596,7 @@ impl<'a> Geometry<'a> {
             source_ids: None,
             channels: Vec::new(),
             faces: Some(m.faces()),
+            comments: &[],
         }
     }
 

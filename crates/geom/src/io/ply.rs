@@ -152,6 +152,8 @@ struct Header {
     body: usize,
     /// Number of header lines (the body's first line is `lines + 1`).
     lines: usize,
+    /// Text of the `comment` lines, in order.
+    comments: Vec<String>,
 }
 
 fn is_keyword_line(bytes: &[u8], kw: &[u8]) -> bool {
@@ -177,6 +179,7 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header> {
     }
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut comments = Vec::new();
     loop {
         let Some((n, raw)) = lines.next() else {
             return Err(err(
@@ -184,8 +187,14 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header> {
                 "the header ends without an 'end_header' line".into(),
             ));
         };
-        // Comments may hold anything, including non-UTF-8 bytes: skip them unchecked.
-        if is_keyword_line(raw, b"comment") || is_keyword_line(raw, b"obj_info") {
+        // Comments may hold anything, including non-UTF-8 bytes: keep them unchecked.
+        if is_keyword_line(raw, b"comment") {
+            let text = &raw[b"comment".len()..];
+            let text = text.strip_prefix(b" ").unwrap_or(text);
+            comments.push(String::from_utf8_lossy(text).into_owned());
+            continue;
+        }
+        if is_keyword_line(raw, b"obj_info") {
             continue;
         }
         let line = line_str(path, n, raw)?;
@@ -335,7 +344,13 @@ fn parse_header(bytes: &[u8], path: &Path) -> Result<Header> {
         elements,
         body: lines.offset(),
         lines: end_line,
+        comments,
     })
+}
+
+/// The header's comment lines (the data after the header is not read).
+pub(crate) fn header_comments(bytes: &[u8], path: &Path) -> Result<Vec<String>> {
+    parse_header(bytes, path).map(|h| h.comments)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1096,6 +1111,12 @@ pub(crate) fn check_writable(g: &Geometry, path: &Path) -> Result<()> {
         path: path.to_path_buf(),
         message,
     };
+    if let Some(c) = g.comments.iter().find(|c| c.contains(['\n', '\r'])) {
+        return Err(unsupported(format!(
+            "header comment {} holds a line break; a PLY comment is one line",
+            show(c)
+        )));
+    }
     for &(name, ch) in &g.channels {
         if RESERVED.contains(&name) {
             return Err(unsupported(format!(
@@ -1120,6 +1141,9 @@ fn write_header(w: &mut dyn Write, g: &Geometry, enc: PlyEncoding) -> io::Result
     h.push_str("ply\n");
     h.push_str(&format!("format {} 1.0\n", enc.name()));
     h.push_str(&format!("comment written by reconbench ({})\n", g.what()));
+    for c in g.comments {
+        h.push_str(&format!("comment {c}\n"));
+    }
     h.push_str(&format!("element vertex {}\n", g.positions.len()));
     h.push_str("property double x\nproperty double y\nproperty double z\n");
     if g.normals.is_some() {
