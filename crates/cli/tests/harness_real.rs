@@ -90,7 +90,8 @@ fn real_sets_and_a_cloud_run_end_to_end() {
     assert_eq!(m["topology_ok"], 1.0, "{m}");
     // The oracle's normals are the ground truth (area-weighted vertex normals): zero error.
     let m = &row(&rows, "3holes", "gt-normals")["metrics"];
-    assert!(m["normal_mean_deg"].as_f64().unwrap() < 1e-9, "{m}");
+    // (acos rounds: identical unit vectors read as up to ~1e-6 degrees apart)
+    assert!(m["normal_max_deg"].as_f64().unwrap() < 1e-5, "{m}");
     // The reference mesh of a mesh set is the mesh: no distance to itself.
     let m = &row(&rows, "3holes", "reference-mesh")["metrics"];
     assert!(m["hausdorff"].as_f64().unwrap() < 1e-9, "{m}");

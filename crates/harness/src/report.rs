@@ -34,6 +34,9 @@ pub struct ExpectResult {
     pub ratio: Option<f64>,
     /// Configurations that matched.
     pub matched: usize,
+    /// The matched configurations as `dataset / method` labels (numerator side).
+    #[serde(default)]
+    pub cells: Vec<String>,
     /// Source of the published value.
     pub source: String,
     /// Tolerance.
@@ -191,6 +194,11 @@ pub fn check_expectations(expect: &[Expect], groups: &[Group]) -> Result<Vec<Exp
     for e in expect {
         let tol = Tol::parse(&e.tol)?;
         let vals = selected_values(groups, &e.select, &e.metric);
+        let cells: Vec<String> = groups
+            .iter()
+            .filter(|g| group_matches(g, &e.select))
+            .map(|g| format!("{} / {}", g.labels.dataset, g.labels.method))
+            .collect();
         let mut reproduced = mean(&vals);
         if let Some(over) = &e.over {
             let den = mean(&selected_values(groups, over, &e.metric));
@@ -211,6 +219,7 @@ pub fn check_expectations(expect: &[Expect], groups: &[Group]) -> Result<Vec<Exp
             reproduced,
             ratio,
             matched: vals.len(),
+            cells,
             source: e.source.clone(),
             tol: tol.to_string(),
             pass: reproduced.is_some_and(|r| tol.within(e.value, r)),
@@ -264,7 +273,7 @@ pub fn write_report(
         None => Vec::new(),
     };
     write_data(&mut md, &groups);
-    write_expectations(&mut md, &expect);
+    write_expectations(&mut md, &expect, &groups);
 
     let mut table_files = Vec::new();
     for t in &tables::build(&groups, &opts.metrics) {
@@ -331,7 +340,7 @@ fn write_header(
 }
 
 /// The published figures next to the reproduced ones.
-fn write_expectations(md: &mut String, expect: &[ExpectResult]) {
+fn write_expectations(md: &mut String, expect: &[ExpectResult], groups: &[Group]) {
     if expect.is_empty() {
         return;
     }
@@ -342,6 +351,7 @@ fn write_expectations(md: &mut String, expect: &[ExpectResult]) {
         expect.len() - misses,
         expect.len()
     );
+    write_expectation_pivot(md, expect, groups);
     md.push_str("| cells | metric | published | reproduced | ratio | tolerance | source | |\n|---|---|---:|---:|---:|---|---|---|\n");
     for e in expect {
         let _ = writeln!(
@@ -379,6 +389,60 @@ fn write_expectations(md: &mut String, expect: &[ExpectResult]) {
         let _ = writeln!(md, "- {why} ({}: {})", cells.len(), cells.join("; "));
     }
     md.push('\n');
+}
+
+/// The published figures that each concern one configuration, one row per configuration
+/// and one column per metric: `reproduced (published)`, a miss in bold. Left out when no
+/// configuration has two or more of them (the list below says it all then).
+fn write_expectation_pivot(md: &mut String, expect: &[ExpectResult], groups: &[Group]) {
+    let single: Vec<&ExpectResult> = expect
+        .iter()
+        .filter(|e| e.cells.len() == 1 && !e.selector.contains(" over "))
+        .collect();
+    let mut rows: Vec<&str> = Vec::new();
+    let mut cols: Vec<&str> = Vec::new();
+    for e in &single {
+        if !rows.contains(&e.cells[0].as_str()) {
+            rows.push(&e.cells[0]);
+        }
+        if !cols.contains(&e.metric.as_str()) {
+            cols.push(&e.metric);
+        }
+    }
+    if rows.len() == single.len() {
+        return;
+    }
+    md.push_str("Reproduced (published); a miss in bold:\n\n| configuration |");
+    for c in &cols {
+        let _ = write!(md, " {c} |");
+    }
+    md.push_str(" time (s) |\n|---|");
+    md.push_str(&"---:|".repeat(cols.len() + 1));
+    md.push('\n');
+    for r in &rows {
+        let _ = write!(md, "| {r} |");
+        for c in &cols {
+            let cell = single
+                .iter()
+                .find(|e| e.cells[0] == *r && e.metric == *c)
+                .map_or_else(String::new, |e| {
+                    let text = format!(
+                        "{} ({})",
+                        e.reproduced.map_or("–".into(), fmt_num),
+                        fmt_num(e.published)
+                    );
+                    if e.pass { text } else { format!("**{text}**") }
+                });
+            let _ = write!(md, " {cell} |");
+        }
+        let time = groups
+            .iter()
+            .find(|g| format!("{} / {}", g.labels.dataset, g.labels.method) == *r)
+            .and_then(|g| g.cost.get("method_s"))
+            .map_or("–".into(), |s| fmt_num(s.mean));
+        let _ = writeln!(md, " {time} |");
+    }
+    md.push_str("\nEvery figure with its source and tolerance:\n\n");
 }
 
 /// The data of an experiment that reads files: per dataset its source, input, size and
