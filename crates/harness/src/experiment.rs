@@ -632,7 +632,9 @@ fn dataset_base(d: &DatasetEntry, base: &Path) -> Result<(String, DataSpec, bool
             "feature_angle_deg and closed describe a mesh ground truth: only for real or mesh",
         ));
     }
-    let feature_angle_deg = d.feature_angle_deg.unwrap_or(30.0);
+    let feature_angle_deg = d
+        .feature_angle_deg
+        .unwrap_or(reconbench_synth::DEFAULT_MESH_FEATURE_ANGLE_DEG);
     if !(feature_angle_deg.is_finite() && feature_angle_deg > 0.0 && feature_angle_deg < 180.0) {
         return Err(HarnessError::input(format!(
             "feature_angle_deg = {feature_angle_deg}: must be in (0, 180)"

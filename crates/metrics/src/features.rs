@@ -46,7 +46,10 @@ pub const FEATURE_CHANNEL: &str = "feature";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct FeatureOptions {
-    /// A curve counts when `180 - dihedral_deg >= feature_angle_deg` (20).
+    /// A curve counts when `180 - dihedral_deg >= feature_angle_deg` (20). A mesh
+    /// reference's edges count from 30 degrees at least (synth's
+    /// `DEFAULT_MESH_FEATURE_ANGLE_DEG`, below which its facets of smooth parts would
+    /// count as features).
     pub feature_angle_deg: f64,
     /// `r` as a multiple of the mean spacing (1).
     pub radius_factor: f64,

@@ -6,7 +6,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use reconbench_geom::topology::{self, MeshTopology};
 use reconbench_geom::{Aabb, MeshBvh, TriMesh};
-use reconbench_synth::{FeatureCurve, Shape};
+use reconbench_synth::{DEFAULT_MESH_FEATURE_ANGLE_DEG, FeatureCurve, Shape};
 
 use crate::error::{MetricsError, Result};
 use crate::sampling::{AreaSampler, SurfaceSamples, sample_shape};
@@ -202,9 +202,12 @@ impl<'a> Reference<'a> {
     }
 
     /// Ground-truth sharp feature curves. A shape gives its declared curves. A mesh gives
-    /// each manifold edge whose face normals differ by at least `min_angle_deg` as a
-    /// two-point curve with `dihedral_deg = 180 - angle between the normals`.
+    /// each manifold edge whose face normals differ by at least `min_angle_deg`, and at
+    /// least synth's [`DEFAULT_MESH_FEATURE_ANGLE_DEG`] (so a mesh file and the same mesh
+    /// as an experiment's data set have the same features), as a two-point curve with
+    /// `dihedral_deg = 180 - angle between the normals`.
     pub fn feature_curves(&self, min_angle_deg: f64) -> Vec<FeatureCurve> {
+        let min_angle_deg = min_angle_deg.max(DEFAULT_MESH_FEATURE_ANGLE_DEG);
         match &self.inner {
             Inner::Analytic(s) => s.feature_curves(),
             Inner::Mesh(m) => mesh_sharp_edges(&m.mesh, &MeshTopology::new(&m.mesh), min_angle_deg)

@@ -29,4 +29,6 @@ pub use perturb::{PerturbSpec, Reference};
 pub use sampler::{Density, SamplerSpec};
 pub use scanner::ScanSpec;
 pub use shape::{FeatureCurve, Sample, Shape, ShapeInfo, SurfacePoint};
-pub use shapes::{MeshShape, MeshShapeOptions, ShapeSpec, catalog, from_spec};
+pub use shapes::{
+    DEFAULT_MESH_FEATURE_ANGLE_DEG, MeshShape, MeshShapeOptions, ShapeSpec, catalog, from_spec,
+};

@@ -32,7 +32,7 @@ pub mod revolved;
 pub mod sheet;
 pub mod slab;
 
-pub use mesh_shape::{MeshShape, MeshShapeOptions};
+pub use mesh_shape::{DEFAULT_MESH_FEATURE_ANGLE_DEG, MeshShape, MeshShapeOptions};
 
 /// A surface in its natural units (crate-internal building block of [`Normalized`]).
 pub trait Geometry: Send + Sync + fmt::Debug {
