@@ -19,6 +19,7 @@
 //! <- `engine` <- `normals`.
 //! See `docs/methods/ufm.md`.
 
+pub mod closure;
 pub mod complex;
 pub mod engine;
 pub mod facet_fit;
@@ -43,7 +44,7 @@ pub use engine::{Complex, Counters, UfmState};
 pub use matching::StopRule;
 pub use normals::{UfmMesh, UfmMeshParams};
 pub use params::{
-    Init, Nvc, NvcLevel, NvcStart, OutputSet, PARAM_DOCS, SizeOrder, UfmParams, Update,
+    Init, Mode, Nvc, NvcLevel, NvcStart, OutputSet, PARAM_DOCS, SizeOrder, UfmParams, Update,
 };
 
 /// Registry name.
@@ -156,7 +157,7 @@ fn assumption_flags(p: &UfmParams) -> String {
     format!(
         "A-01=exact-dedup A-02=facet-id A-03=open-ball A-04=skip+rebuild A-05=max-min-key \
          A-06={:?} A-07=converged/fixed/cycle{}/patience:{}/max:{} A-08=freeze:{} \
-         A-09=lock:{} A-11={:?} init={:?} update={:?} escapes={} max_fold={} reorder={} \
+         A-09=lock:{} A-11={:?} mode={:?} init={:?} update={:?} escapes={} max_fold={} close={} reorder={} \
          nvc={:?} C-01=consistent-dihedral C-02=min(factor:{}*mean,alpha_gen:{}) \
          C-03=adjacent-shadow-pair C-04=flat:facet-average C-05={:?} \
          C-06={:?} C-07=full-unfiltered R={}",
@@ -167,10 +168,12 @@ fn assumption_flags(p: &UfmParams) -> String {
         p.freeze_full,
         p.lock_matched,
         p.output,
+        p.mode,
         p.init,
         p.update,
         p.escapes,
         p.max_fold,
+        p.close_max_turn,
         p.reorder,
         p.nvc,
         p.nvc_flat_factor,
@@ -223,7 +226,18 @@ impl Reconstructor for Ufm {
         let dt = &st.cx.dt;
         let nv = dt.n_vertices();
         let facets = st.cx.facets();
-        let out = output_facets(&st, p.output);
+        let mut out = output_facets(&st, p.output);
+        let mut closure = closure::ClosureStats::default();
+        let mut filled: Vec<[u32; 3]> = Vec::new();
+        let mut closure_s = 0.0;
+        let closing = p.mode == Mode::Closed && p.close_max_turn > 0.0;
+        if closing {
+            let t = Instant::now();
+            (out, filled, closure) =
+                closure::close(&st.cx, dt.vertices(), &out, p.close_max_turn.to_radians());
+            closure_s = t.elapsed().as_secs_f64();
+            ctx.record_phase("closure", closure_s);
+        }
         let faces: Vec<[u32; 3]> = out
             .iter()
             .map(|&f| {
@@ -231,6 +245,11 @@ impl Reconstructor for Ufm {
                     .v
                     .map(|v| to_input(dt.input_of_vertex(v)))
             })
+            .chain(
+                filled
+                    .iter()
+                    .map(|t| t.map(|v| to_input(dt.input_of_vertex(v)))),
+            )
             .collect();
         // Every input point is a vertex (interpolation); exact duplicates (A-01) are
         // unreferenced and listed as refused.
@@ -243,7 +262,7 @@ impl Reconstructor for Ufm {
         orient_outward(&mut mesh)?;
         let topo = MeshTopology::new(&mesh);
         let rep = analyze_with(&mesh, &topo);
-        let output_s = t_out.elapsed().as_secs_f64();
+        let output_s = t_out.elapsed().as_secs_f64() - closure_s;
         ctx.record_phase("output", output_s);
 
         let mut d = Diagnostics::new();
@@ -282,6 +301,23 @@ impl Reconstructor for Ufm {
         num(&mut d, "build_failures", c.build_failures as f64);
         num(&mut d, "fold_repairs", c.fold_repairs as f64);
         num(&mut d, "escapes_used", st.escapes as f64);
+        if closing {
+            num(&mut d, "closure_added", closure.added as f64);
+            num(&mut d, "closure_unpinched", closure.unpinched_faces as f64);
+            num(&mut d, "closure_untwisted", closure.untwisted_faces as f64);
+            num(&mut d, "closure_bubbles", closure.bubble_faces as f64);
+            num(
+                &mut d,
+                "closure_inserted_points",
+                closure.inserted_points as f64,
+            );
+            num(&mut d, "closure_filled_holes", closure.filled_holes as f64);
+            num(
+                &mut d,
+                "closure_fill_triangles",
+                closure.fill_triangles as f64,
+            );
+        }
         if p.nvc != Nvc::Off {
             // Algorithm C (summed over the iterations with filtering).
             num(&mut d, "nvc_points", st.nvc.filtered as f64);

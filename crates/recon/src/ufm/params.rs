@@ -26,6 +26,19 @@ pub enum SizeOrder {
     SmallFirst,
 }
 
+/// What `ufm` outputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// The loop's output closed by the Delaunay hole closure (`closure.rs`, a deviation):
+    /// watertight on the seed's real data sets.
+    #[default]
+    Closed,
+    /// The thesis as written: the loop's matched facets only (Table 3.2 as published is
+    /// run in this mode).
+    Literal,
+}
+
 /// The output triangle set (ASSUMPTION A-11).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -100,6 +113,9 @@ pub enum NvcLevel {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct UfmParams {
+    /// `closed` (the loop, then the Delaunay hole closure) or `literal` (the thesis's
+    /// output).
+    pub mode: Mode,
     /// Starting cluster of the initial umbrellas.
     pub init: Init,
     /// ASSUMPTION A-09: make `(3)` facets non-removable during the update (with the A-04
@@ -132,6 +148,12 @@ pub struct UfmParams {
     /// umbrellas are not frozen. `0` = off (the thesis's literal loop).
     #[serde(rename = "max_fold_deg", alias = "max_fold")]
     pub max_fold: f64,
+    /// Delaunay hole closure (`mode = "closed"`, a deviation; `closure.rs`): after the
+    /// loop, the holes are closed from their boundaries with the Delaunay triangles that
+    /// continue the surface most flatly, each turning by at most this many degrees
+    /// against its neighbour (120); `0` = no closure.
+    #[serde(rename = "close_max_turn_deg")]
+    pub close_max_turn: f64,
     /// Algorithm C (chapter 5): NVC filtering in the update; `off` = chapter 3.
     pub nvc: Nvc,
     /// Generic cone angle `α_gen` in degrees (spec: 45 = π/4); also the clamp of
@@ -159,6 +181,7 @@ pub struct UfmParams {
 impl Default for UfmParams {
     fn default() -> Self {
         Self {
+            mode: Mode::Closed,
             init: Init::Gabriel,
             lock_matched: true,
             freeze_full: true,
@@ -169,6 +192,7 @@ impl Default for UfmParams {
             patience: 20,
             escapes: 0,
             max_fold: 0.0,
+            close_max_turn: 120.0,
             nvc: Nvc::Off,
             nvc_angle: 45.0,
             nvc_flat_factor: 2.0,
@@ -202,6 +226,12 @@ impl UfmParams {
                 message: format!("must be in [0, 180] degrees, got {}", self.max_fold),
             });
         }
+        if !(0.0..=180.0).contains(&self.close_max_turn) {
+            return Err(MethodError::InvalidParameter {
+                name: "close_max_turn_deg".into(),
+                message: format!("must be in [0, 180] degrees, got {}", self.close_max_turn),
+            });
+        }
         if !(self.nvc_angle > 0.0 && self.nvc_angle <= 90.0) {
             return Err(MethodError::InvalidParameter {
                 name: "nvc_angle_deg".into(),
@@ -232,6 +262,11 @@ impl UfmParams {
 
 /// Docs of every parameter of [`UfmParams`], in `list` order.
 pub const PARAM_DOCS: &[ParamDoc] = &[
+    ParamDoc::new(
+        "mode",
+        Unit::Choice,
+        "closed (the loop, then the Delaunay hole closure; watertight) or literal (the thesis's output)",
+    ),
     ParamDoc::new(
         "init",
         Unit::Choice,
@@ -281,6 +316,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "max_fold_deg",
         Unit::Deg,
         "deviation: rebuild umbrellas folding back by more than this angle (0 = thesis)",
+    ),
+    ParamDoc::new(
+        "close_max_turn_deg",
+        Unit::Deg,
+        "closed mode: close the loop's holes with Delaunay triangles turning at most this (0 = none)",
     ),
     ParamDoc::new(
         "nvc",
