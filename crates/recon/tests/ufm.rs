@@ -937,3 +937,29 @@ fn nvc_flat_cones_keep_sampled_box_edges() {
     }
     assert!(bevel_nvc < bevel_off, "{bevel_nvc} vs {bevel_off}");
 }
+
+/// The closure alone: holes cut around ten vertices of a converged sphere (each a disk
+/// with its centre freed) are closed again with Delaunay triangles only, back to a
+/// watertight genus-0 surface on every point.
+#[test]
+fn closure_recloses_holes_cut_into_a_converged_sphere() {
+    use reconbench_recon::ufm::{closure, output_facets};
+    let pts = synth("sphere", "blue-noise", 2000, None, 1);
+    let st = run_ufm(&pts, &UfmParams::default(), &mut RunCtx::new(1)).expect("ufm");
+    let facets = st.cx.facets();
+    let mut out = output_facets(&st, OutputSet::MatchedFacets);
+    let n_full = out.len();
+    out.retain(|&f| facets[f as usize].v.iter().all(|&v| v % 200 != 7));
+    assert!(out.len() < n_full - 40, "holes were cut");
+    let (closed, extra, stats) =
+        closure::close(&st.cx, st.cx.dt.vertices(), &out, 120f64.to_radians());
+    assert!(extra.is_empty(), "Delaunay triangles suffice: {stats:?}");
+    assert!(stats.added >= n_full - out.len(), "{stats:?}");
+    let faces: Vec<[u32; 3]> = closed.iter().map(|&f| facets[f as usize].v).collect();
+    let mesh = reconbench_geom::TriMesh::new(st.cx.dt.vertices().to_vec(), faces).unwrap();
+    let t = analyze(&mesh);
+    assert!(t.watertight, "{t:?}");
+    assert_eq!(t.genus, Some(0));
+    assert_eq!(t.referenced_vertices, pts.len());
+    assert_eq!(t.faces, 2 * pts.len() - 4);
+}

@@ -40,6 +40,28 @@ pub struct ClosureStats {
     pub inserted_points: usize,
 }
 
+/// Hasher of edge keys (two vertex ids packed in a `u64`): one multiply-xorshift, much
+/// cheaper than the default SipHash and enough for keys that are not adversarial.
+#[derive(Default)]
+struct EdgeHasher(u64);
+
+impl std::hash::Hasher for EdgeHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(self.0 ^ u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, x: u64) {
+        let h = (self.0 ^ x).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.0 = h ^ (h >> 32);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+type EdgeMap = HashMap<u64, [u32; 2], std::hash::BuildHasherDefault<EdgeHasher>>;
+
 fn edge_key(a: u32, b: u32) -> u64 {
     let (a, b) = if a < b { (a, b) } else { (b, a) };
     (u64::from(a) << 32) | u64::from(b)
@@ -51,7 +73,7 @@ struct Surface<'a> {
     cx: &'a Complex,
     pts: &'a [DVec3],
     in_s: Vec<bool>,
-    edges: HashMap<u64, [u32; 2]>,
+    edges: EdgeMap,
     faces_at: Vec<u32>,
     boundary_at: Vec<u32>,
     /// Per facet: oriented as its sorted vertex triple (`false`) or reversed (`true`).
@@ -61,6 +83,9 @@ struct Surface<'a> {
     comp: Vec<u32>,
     /// Facets per component (may hold stale ids; filtered by `comp`).
     members: Vec<Vec<u32>>,
+    /// Vertices whose faces changed since the last pinch check (flag and list).
+    dirty: Vec<bool>,
+    dirty_list: Vec<u32>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -72,12 +97,14 @@ impl<'a> Surface<'a> {
             cx,
             pts,
             in_s: vec![false; cx.facets().len()],
-            edges: HashMap::with_capacity(faces.len() * 3 / 2 + 16),
+            edges: EdgeMap::with_capacity_and_hasher(faces.len() * 3 / 2 + 16, Default::default()),
             faces_at: vec![0; nv],
             boundary_at: vec![0; nv],
             flip: vec![false; cx.facets().len()],
             comp: vec![NONE; cx.facets().len()],
             members: Vec::new(),
+            dirty: vec![false; nv],
+            dirty_list: Vec::new(),
         };
         for &f in faces {
             s.add(f);
@@ -91,29 +118,30 @@ impl<'a> Surface<'a> {
     /// first fixed point, `docs/methods/ufm.md`) or open (left over by the unpinching).
     /// Their points become free for the growth. Returns the faces removed.
     fn pop_bubbles(&mut self) -> usize {
-        let pieces: Vec<Vec<u32>> = (0..self.members.len())
-            .map(|c| {
-                let mut live: Vec<u32> = self.members[c]
-                    .iter()
-                    .copied()
-                    .filter(|&f| self.in_s[f as usize] && self.comp[f as usize] == c as u32)
-                    .collect();
-                live.sort_unstable();
-                live.dedup();
-                live
-            })
-            .collect();
+        let mut size = vec![0usize; self.members.len()];
+        for (f, &c) in self.comp.iter().enumerate() {
+            if c != NONE && self.in_s[f] {
+                size[c as usize] += 1;
+            }
+        }
         // A small input is what it is: only crumbs next to a real surface are popped.
-        let total: usize = pieces.iter().map(Vec::len).sum();
-        let largest = pieces.iter().map(Vec::len).max().unwrap_or(0);
+        let total: usize = size.iter().sum();
+        let largest = size.iter().copied().max().unwrap_or(0);
         if largest <= MAX_BUBBLE || total < MIN_FACES_FOR_BUBBLES {
             return 0;
         }
         let mut removed = 0;
-        for live in pieces {
-            if live.is_empty() || live.len() > MAX_BUBBLE {
+        for c in 0..size.len() {
+            if size[c] == 0 || size[c] > MAX_BUBBLE {
                 continue;
             }
+            let mut live: Vec<u32> = self.members[c]
+                .iter()
+                .copied()
+                .filter(|&f| self.in_s[f as usize] && self.comp[f as usize] == c as u32)
+                .collect();
+            live.sort_unstable();
+            live.dedup();
             for f in live {
                 self.remove(f);
                 removed += 1;
@@ -341,9 +369,19 @@ impl<'a> Surface<'a> {
         out
     }
 
+    fn touch(&mut self, v: u32) {
+        if !self.dirty[v as usize] {
+            self.dirty[v as usize] = true;
+            self.dirty_list.push(v);
+        }
+    }
+
     fn add(&mut self, f: u32) {
         self.in_s[f as usize] = true;
         let [a, b, c] = self.corners(f);
+        for v in [a, b, c] {
+            self.touch(v);
+        }
         for (x, y) in [(a, b), (b, c), (a, c)] {
             let before = self.count(x, y);
             let e = self.edges.entry(edge_key(x, y)).or_insert([NONE; 2]);
@@ -363,6 +401,9 @@ impl<'a> Surface<'a> {
         self.in_s[f as usize] = false;
         self.comp[f as usize] = NONE;
         let [a, b, c] = self.corners(f);
+        for v in [a, b, c] {
+            self.touch(v);
+        }
         for (x, y) in [(a, b), (b, c), (a, c)] {
             let before = self.count(x, y);
             let k = edge_key(x, y);
@@ -380,6 +421,55 @@ impl<'a> Surface<'a> {
         for v in [a, b, c] {
             self.faces_at[v as usize] -= 1;
         }
+    }
+
+    /// Whether the faces at `v` form one fan (connected through their edges at `v`),
+    /// without allocating: union-find over at most 64 faces, else [`fans`](Self::fans).
+    fn single_fan(&self, v: u32) -> bool {
+        let mut others = [[0u32; 2]; 64];
+        let mut parent = [0u8; 64];
+        let mut k = 0;
+        for &f in self.cx.row(v as usize) {
+            if !self.in_s[f as usize] {
+                continue;
+            }
+            if k == 64 {
+                return self.fans(v).len() == 1;
+            }
+            let c = self.corners(f);
+            let mut o = [0u32; 2];
+            let mut j = 0;
+            for w in c {
+                if w != v && j < 2 {
+                    o[j] = w;
+                    j += 1;
+                }
+            }
+            others[k] = o;
+            parent[k] = k as u8;
+            k += 1;
+        }
+        fn root(p: &mut [u8; 64], mut x: usize) -> usize {
+            while p[x] as usize != x {
+                p[x] = p[p[x] as usize];
+                x = p[x] as usize;
+            }
+            x
+        }
+        let mut groups = k;
+        for i in 0..k {
+            for j in i + 1..k {
+                let (a, b) = (others[i], others[j]);
+                if a[0] == b[0] || a[0] == b[1] || a[1] == b[0] || a[1] == b[1] {
+                    let (ri, rj) = (root(&mut parent, i), root(&mut parent, j));
+                    if ri != rj {
+                        parent[ri] = rj as u8;
+                        groups -= 1;
+                    }
+                }
+            }
+        }
+        groups <= 1
     }
 
     /// Whether `abc` is already a face (its three edges all belong to one face).
@@ -530,10 +620,16 @@ impl<'a> Surface<'a> {
         }
     }
 
+    /// One pass over the vertices whose faces changed since the last pass.
     fn unpinch_once(&mut self) -> usize {
         let mut removed = 0;
-        for v in 0..self.cx.n_vertices() as u32 {
-            if self.faces_at[v as usize] < 2 {
+        let mut list = std::mem::take(&mut self.dirty_list);
+        list.sort_unstable();
+        for &v in &list {
+            self.dirty[v as usize] = false;
+        }
+        for v in list {
+            if self.faces_at[v as usize] < 2 || self.single_fan(v) {
                 continue;
             }
             let mut fans = self.fans(v);
