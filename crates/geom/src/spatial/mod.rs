@@ -16,6 +16,7 @@ mod mesh_bvh;
 mod morton;
 mod self_knn;
 mod tables;
+mod tri_intersect;
 mod triangle;
 
 pub use kd_tree::{DEFAULT_SPACING_K, PointIndex, mean_spacing};
@@ -23,6 +24,7 @@ pub use mesh_bvh::{ClosestHit, MeshBvh, RayHit};
 pub use morton::morton_order;
 pub use self_knn::{KnnHit, knn_self_map, knn_self_table};
 pub use tables::{KnnTable, Neighbor, RadiusTable};
+pub use tri_intersect::{exactly_collinear, tri_tri_intersect};
 pub use triangle::{
     closest_point_on_segment, closest_point_on_triangle, closest_point_on_triangle_bary,
 };

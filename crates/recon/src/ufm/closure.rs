@@ -1067,11 +1067,25 @@ fn boundary_loops(s: &Surface) -> Vec<Vec<u32>> {
 }
 
 /// A triangulation of the polygon `lp` of least total area whose diagonals are not
-/// edges of the surface yet (dynamic programming over sub-polygons, as in Liepa's hole
+/// edges of the surface yet (and, with `check`, whose triangles cross no surface face
+/// within two rings that they share no vertex with) (dynamic programming over sub-polygons, as in Liepa's hole
 /// filling with the area weight); `None` when every triangulation would reuse an edge.
-fn fill_polygon(s: &Surface, lp: &[u32]) -> Option<Vec<[u32; 3]>> {
+fn fill_polygon(s: &Surface, lp: &[u32], check: bool) -> Option<Vec<[u32; 3]>> {
     let n = lp.len();
     let p = |i: usize| s.pts[lp[i] as usize];
+    let local = if check {
+        local_faces(s, lp)
+    } else {
+        Vec::new()
+    };
+    // A candidate triangle must not cross a nearby face it shares no vertex with.
+    let crosses = |t: [u32; 3]| {
+        let tri = t.map(|v| s.pts[v as usize]);
+        local.iter().any(|(ids, f)| {
+            !ids.iter().any(|v| t.contains(v))
+                && reconbench_geom::spatial::tri_tri_intersect(&tri, f)
+        })
+    };
     let free =
         |i: usize, j: usize| j - i == 1 || (i == 0 && j == n - 1) || s.count(lp[i], lp[j]) == 0;
     let mut cost = vec![f64::INFINITY; n * n];
@@ -1087,7 +1101,10 @@ fn fill_polygon(s: &Surface, lp: &[u32]) -> Option<Vec<[u32; 3]>> {
             }
             for k in i + 1..j {
                 let c = cost[i * n + k] + cost[k * n + j];
-                if !c.is_finite() || s.is_face(lp[i], lp[k], lp[j]) {
+                if !c.is_finite()
+                    || s.is_face(lp[i], lp[k], lp[j])
+                    || crosses([lp[i], lp[k], lp[j]])
+                {
                     continue;
                 }
                 let area = 0.5 * (p(k) - p(i)).cross(p(j) - p(i)).length();
@@ -1115,6 +1132,37 @@ fn fill_polygon(s: &Surface, lp: &[u32]) -> Option<Vec<[u32; 3]>> {
     Some(tris)
 }
 
+/// Longest hole loop whose fill is checked against crossing the surface around it.
+const CHECKED_FILL: usize = 32;
+
+/// The surface faces within two rings of a loop's vertices, with their corners.
+fn local_faces(s: &Surface, lp: &[u32]) -> Vec<([u32; 3], [DVec3; 3])> {
+    let mut ring: Vec<u32> = lp.to_vec();
+    for &v in lp {
+        for &f in s.cx.row(v as usize) {
+            if s.in_s[f as usize] {
+                ring.extend(s.corners(f));
+            }
+        }
+    }
+    ring.sort_unstable();
+    ring.dedup();
+    let mut faces: Vec<u32> = ring
+        .iter()
+        .flat_map(|&v| s.cx.row(v as usize).iter().copied())
+        .filter(|&f| s.in_s[f as usize])
+        .collect();
+    faces.sort_unstable();
+    faces.dedup();
+    faces
+        .into_iter()
+        .map(|f| {
+            let c = s.corners(f);
+            (c, c.map(|v| s.pts[v as usize]))
+        })
+        .collect()
+}
+
 /// Fills the holes of at most [`MAX_FILL`] edges that no Delaunay triangle can close
 /// (the last resort: their triangles are not Delaunay facets), loop by loop.
 fn fill_small_holes(s: &mut Surface, stats: &mut ClosureStats) -> Vec<[u32; 3]> {
@@ -1123,7 +1171,12 @@ fn fill_small_holes(s: &mut Surface, stats: &mut ClosureStats) -> Vec<[u32; 3]> 
         if lp.len() > MAX_FILL {
             continue;
         }
-        let Some(tris) = fill_polygon(s, &lp) else {
+        // Prefer a fill that crosses no nearby face; a closed surface comes first, so
+        // without one the least-area fill is taken anyway.
+        let checked = (lp.len() <= CHECKED_FILL)
+            .then(|| fill_polygon(s, &lp, true))
+            .flatten();
+        let Some(tris) = checked.or_else(|| fill_polygon(s, &lp, false)) else {
             continue;
         };
         for t in &tris {
