@@ -349,6 +349,39 @@ pub struct Experiment {
     pub swept: Vec<String>,
 }
 
+/// Longest per-cell timeout, seconds (a week).
+pub const MAX_TIMEOUT_S: f64 = 604_800.0;
+/// Smallest per-cell memory limit, MiB.
+pub const MIN_MEMORY_LIMIT_MIB: u64 = 16;
+/// Most points a sampled dataset may ask for (about 2.4 GB of positions alone).
+pub const MAX_POINTS: u64 = 100_000_000;
+/// Most cells an experiment may expand to.
+pub const MAX_CELLS: u64 = 1_000_000;
+
+/// Checks the `[[expect]]` entries before any cell runs: tolerance syntax and selector
+/// keys.
+fn validate_expectations(expect: &[Expect]) -> Result<()> {
+    for (i, e) in expect.iter().enumerate() {
+        crate::compare::Tol::parse(&e.tol)
+            .map_err(|err| HarnessError::input(format!("expect[{i}].tol: {err}")))?;
+        for sel in std::iter::once(&e.select).chain(e.over.as_ref()) {
+            for k in sel.keys() {
+                let known = ["dataset", "method", "perturbation", "shape", "points"]
+                    .contains(&k.as_str())
+                    || k.strip_prefix("params.").is_some_and(|p| !p.is_empty())
+                    || inputs::validate_perturb_key(k).is_ok();
+                if !known {
+                    return Err(HarnessError::input(format!(
+                        "expect[{i}]: unknown selector key '{}'; valid: dataset, method, perturbation, shape, points, params.NAME or a perturbation key",
+                        k.escape_debug()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Salt of every key: changes when the harness version changes.
 pub fn key_salt() -> String {
     format!("reconbench-harness/{}", env!("CARGO_PKG_VERSION"))
@@ -385,20 +418,31 @@ impl Experiment {
             .clone()
             .unwrap_or_else(|| default_name.to_string());
         if name.is_empty()
+            || name.starts_with('.')
+            || name.len() > 128
             || !name
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.')
         {
             return Err(HarnessError::input(format!(
-                "experiment name '{name}' must be non-empty and use only letters, digits, '-', '_', '.'"
+                "experiment name '{}' must be 1 to 128 letters, digits, '-', '_', '.', not starting with '.' (it names the results directory)",
+                name.escape_debug()
             )));
         }
         let timeout_s = file.timeout.unwrap_or(600.0);
-        if !(timeout_s.is_finite() && timeout_s > 0.0) {
+        if !(timeout_s.is_finite() && timeout_s > 0.0 && timeout_s <= MAX_TIMEOUT_S) {
             return Err(HarnessError::input(format!(
-                "timeout must be > 0 seconds, got {timeout_s}"
+                "timeout = {timeout_s}: must be in (0, {MAX_TIMEOUT_S}] seconds (a week)"
             )));
         }
+        if let Some(m) = file.memory_limit_mib
+            && m < MIN_MEMORY_LIMIT_MIB
+        {
+            return Err(HarnessError::input(format!(
+                "memory_limit_mib = {m}: below {MIN_MEMORY_LIMIT_MIB} MiB no worker can start"
+            )));
+        }
+        validate_expectations(&file.expect)?;
         let cwd = std::env::current_dir().unwrap_or_default();
         let (cells, swept) = expand(&file, base.unwrap_or(&cwd))?;
         validate_report(&file.report, &swept)?;
@@ -498,6 +542,13 @@ fn expand(file: &ExperimentFile, base: &Path) -> Result<(Vec<Cell>, Vec<String>)
     if file.methods.is_empty() {
         return Err(HarnessError::input("no [[methods]]: add at least one"));
     }
+    if let Seeds::Count(n) = file.seeds
+        && u64::from(n) > MAX_CELLS
+    {
+        return Err(HarnessError::input(format!(
+            "seeds = {n}: at most {MAX_CELLS} (the grid's cell limit)"
+        )));
+    }
     let seeds = file.seeds.indices();
     if seeds.is_empty() {
         return Err(HarnessError::input("seeds: need at least one seed index"));
@@ -515,6 +566,18 @@ fn expand(file: &ExperimentFile, base: &Path) -> Result<(Vec<Cell>, Vec<String>)
         );
     }
 
+    let n_cells = [datasets.len(), perturbs.len(), methods.len(), seeds.len()]
+        .iter()
+        .fold(1u64, |a, &b| a.saturating_mul(b as u64));
+    if n_cells > MAX_CELLS {
+        return Err(HarnessError::input(format!(
+            "the grid has {n_cells} cells ({} datasets x {} perturbations x {} methods x {} seeds); at most {MAX_CELLS}: split the experiment",
+            datasets.len(),
+            perturbs.len(),
+            methods.len(),
+            seeds.len()
+        )));
+    }
     let cells = grid_cells(file, &datasets, &perturbs, &methods, &seeds, &metrics);
     let mut seen = std::collections::HashSet::new();
     for c in &cells {
@@ -568,15 +631,22 @@ fn expand_datasets(file: &ExperimentFile, base: &Path) -> Result<Vec<DatasetConf
 
 fn parse_points(v: &toml::Value) -> Result<Vec<u64>> {
     let points: Vec<u64> = match v {
-        toml::Value::Integer(n) if *n > 0 => vec![*n as u64],
+        toml::Value::Integer(n) if *n > 0 && (*n as u64) <= MAX_POINTS => vec![*n as u64],
         toml::Value::Array(a) => a
             .iter()
-            .map(|v| v.as_integer().filter(|&n| n > 0).map(|n| n as u64))
+            .map(|v| {
+                v.as_integer()
+                    .filter(|&n| n > 0 && (n as u64) <= MAX_POINTS)
+                    .map(|n| n as u64)
+            })
             .collect::<Option<Vec<_>>>()
-            .ok_or_else(|| HarnessError::input("points: expected positive integers"))?,
+            .ok_or_else(|| {
+                HarnessError::input(format!("points: expected integers from 1 to {MAX_POINTS}"))
+            })?,
         other => {
             return Err(HarnessError::input(format!(
-                "points: expected a positive integer or a list, got {other}"
+                "points = {other}: expected an integer from 1 to {MAX_POINTS} (about {:.1} GB of positions at the limit) or a list",
+                MAX_POINTS as f64 * 24.0 / 1e9
             )));
         }
     };
@@ -1171,5 +1241,60 @@ mod tests {
         bytes[last] ^= 1;
         std::fs::write(d.path().join("b").join("m.ply"), bytes).unwrap();
         assert_ne!(ka, key(&d.path().join("b")), "changed bytes: new key");
+    }
+
+    #[test]
+    fn out_of_range_requests_are_refused_when_the_file_loads() {
+        let base = "[[methods]]\nname = \"gt-normals\"\n";
+        let data = "[[datasets]]\nshape = \"sphere\"\npoints = 10\n";
+        for (text, want) in [
+            (
+                format!("{base}[[datasets]]\nshape = \"sphere\"\npoints = -100\n"),
+                "points",
+            ),
+            (
+                format!("{base}[[datasets]]\nshape = \"sphere\"\npoints = 1e12\n"),
+                "expected an integer",
+            ),
+            (
+                format!("{base}[[datasets]]\nshape = \"sphere\"\npoints = 9223372036854775807\n"),
+                "points",
+            ),
+            (
+                format!("{base}[[datasets]]\nshape = \"sphere\"\npoints = [10, 0]\n"),
+                "from 1 to",
+            ),
+            (format!("seeds = 10000000\n{base}{data}"), "at most 1000000"),
+            (format!("timeout = 1e300\n{base}{data}"), "a week"),
+            (
+                format!("memory_limit_mib = 0\n{base}{data}"),
+                "below 16 MiB",
+            ),
+            (
+                format!("name = \"..\"\n{base}{data}"),
+                "not starting with '.'",
+            ),
+            (
+                format!("name = \".\"\n{base}{data}"),
+                "not starting with '.'",
+            ),
+            (
+                format!("{base}{data}[[expect]]\nmetric = \"x\"\nvalue = 1\ntol = \"rel:abc\"\n"),
+                "expect[0].tol",
+            ),
+            (
+                format!(
+                    "{base}{data}[[expect]]\nwhere = {{ methd = \"x\" }}\nmetric = \"x\"\nvalue = 1\n"
+                ),
+                "unknown selector key 'methd'",
+            ),
+        ] {
+            let e = Experiment::parse(&text, "t").unwrap_err().to_string();
+            assert!(e.contains(want), "{text}\n{e}");
+        }
+        // A big but honest grid is accepted; one past the limit is not.
+        let many =
+            format!("seeds = 1000\n{base}[[datasets]]\nshape = \"sphere\"\npoints = [10, 20]\n");
+        assert_eq!(Experiment::parse(&many, "t").unwrap().cells.len(), 2000);
     }
 }
