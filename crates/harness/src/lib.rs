@@ -15,6 +15,7 @@ pub mod error;
 pub mod experiment;
 pub mod inputs;
 pub mod key;
+pub mod lock;
 pub mod methods;
 pub mod metric_spec;
 pub mod oneshot;

@@ -137,8 +137,10 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let t0 = Instant::now();
     crate::error::create_dir_all(&opts.out_dir)?;
     let (results_name, manifest_name) = result_file_names(opts.shard);
-    let results = opts.out_dir.join(results_name);
+    let results = opts.out_dir.join(&results_name);
     let manifest_path = opts.out_dir.join(manifest_name);
+    // One run per results file at a time (shards write their own files).
+    let _lock = crate::lock::RunLock::acquire(&opts.out_dir.join(format!("{results_name}.lock")))?;
     let cells = shard_cells(&exp.cells, opts.shard);
     let limits = Limits {
         timeout_s: opts.timeout_s.unwrap_or(exp.timeout_s),
