@@ -98,8 +98,10 @@ fn apex_rule_variant_refuses_more_clean_points() {
     let t = analyze(&on.mesh);
     assert_manifold_oriented(&t);
     assert_eq!(t.genus, Some(1));
+    // Measured 73 vs 51 with the issue-20 defaults (reject_free_inside); 270 vs 94
+    // before, when covered points were not kept out from under triangles.
     assert!(
-        on.refused.len() > 2 * off.refused.len(),
+        on.refused.len() * 4 > off.refused.len() * 5,
         "refused with A12 {} vs without {}",
         on.refused.len(),
         off.refused.len()
@@ -205,12 +207,18 @@ fn outliers_twenty_percent_issue_targets() {
     assert!(h <= 0.01, "Hausdorff {h} of the diagonal");
 }
 
-/// The paper's advice for noisy data (w1 = 3) on a denser sphere: at least as good.
+/// The paper's advice for noisy data (w1 = 3) on a denser sphere. Measured with the
+/// issue-20 default `reject_free_inside`: recall 0.972, Hausdorff 0.0186 of the diagonal
+/// (one chain of four outliers 0.01-0.064 above the sphere); before it 0.987 / 0.0037.
+/// An outlier within 0.5 ρ of a triangle's plane now blocks the triangle and is often
+/// meshed later instead of being left under it. Over `li_outliers` (w1 = 1, 2 seeds)
+/// the change costs 0.2-1.1 points of recall and brings topology_ok at 30-40 % from
+/// 0-0.5 to 1 (docs/methods/priority_front.md, "Real data").
 #[test]
 fn outliers_twenty_percent_w1_three() {
     let (recall, h) = outlier_run(16_000, 3.0);
-    assert!(recall >= 0.97, "outlier recall {recall}");
-    assert!(h <= 0.01, "Hausdorff {h} of the diagonal");
+    assert!(recall >= 0.96, "outlier recall {recall}");
+    assert!(h <= 0.02, "Hausdorff {h} of the diagonal");
 }
 
 /// I5 is what brings the recall up: with the elevation / height bound off (the
@@ -441,9 +449,12 @@ fn creases_are_meshed_watertight_with_few_refused_points() {
 #[test]
 fn uniform_box_crease_regression() {
     let pts = synth_cloud("box", false, 6000, 1);
+    // I8's evidence was measured without `reject_free_inside` (the default since issue
+    // 20, which keeps points from being covered and refuses 66-80 here either way).
     let refused = |k: usize| {
         let p = PriorityFrontParams {
             support_neighbours: k,
+            reject_free_inside: false,
             ..PriorityFrontParams::default()
         };
         let rec = run(pts.clone(), p, 0);
@@ -456,6 +467,8 @@ fn uniform_box_crease_regression() {
         on <= 120 && off > 3 * on,
         "refused with I8 {on}, without {off}"
     );
+    let rec = run(pts.clone(), PriorityFrontParams::default(), 0);
+    assert!(rec.refused.len() <= 120, "defaults: {}", rec.refused.len());
 }
 
 /// The 2-thread stitch used to leave a thin ring slit around the tube at the far edge of

@@ -43,6 +43,11 @@ pub(crate) struct Cfg {
     /// Crossing-test radius, in units of R.
     pub cross_factor: f64,
     pub reject_free_inside: bool,
+    /// Height bound of the Free points that block a triangle (IMPL-CHOICE I12; absolute).
+    pub free_inside_h: f64,
+    /// Relative height bound of the blocking Free points, share of the longest edge
+    /// (IMPL-CHOICE I12).
+    pub free_inside_rel: f64,
     /// IMPL-CHOICE I6: reject triangles that contain a front vertex in 2-D.
     pub front_inside_check: bool,
     pub fill_any_angle: bool,
@@ -52,6 +57,9 @@ pub(crate) struct Cfg {
     pub sin_elev: f64,
     /// Largest height of a Free candidate in units of R (IMPL-CHOICE I5).
     pub height_r: f64,
+    /// Cosine of the largest angle between a front candidate's fan normal and the
+    /// edge's (IMPL-CHOICE I10); < -1 = off.
+    pub cos_front: f64,
     /// Neighbours of the support plane (IMPL-CHOICE I8); < 3 = off.
     pub support_k: usize,
     /// Neighbour search radius of the support test, in units of R (IMPL-CHOICE I8).
@@ -60,6 +68,9 @@ pub(crate) struct Cfg {
     pub support_tol: f64,
     /// Share of the neighbours the support plane must hold (IMPL-CHOICE I8).
     pub support_share: f64,
+    /// IMPL-CHOICE I11: an I8-supported candidate must lie on a plane that meets the
+    /// tangent plane at the edge within its distance from the edge midpoint.
+    pub support_crease: bool,
 }
 
 /// Operation counters (diagnostics).
@@ -160,6 +171,8 @@ pub(crate) struct Mesher<'g> {
     pub sup_buf: Vec<(f64, u32)>,
     /// Neighbour directions scratch of the support test.
     pub sup_dirs: Vec<DVec3>,
+    /// Unit normal of the support plane of each point that passed the I8 test.
+    pub sup_nrm: std::collections::HashMap<u32, DVec3>,
 }
 
 /// Unit normal of the triangle `(p0, p1, p2)`, `n = (p1 - p0) x (p2 - p0)` normalised
@@ -217,6 +230,7 @@ impl<'g> Mesher<'g> {
             support: vec![0; n],
             sup_buf: Vec::new(),
             sup_dirs: Vec::new(),
+            sup_nrm: std::collections::HashMap::new(),
         }
     }
 

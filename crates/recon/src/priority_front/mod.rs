@@ -262,6 +262,8 @@ fn mesher_cfg(p: &PriorityFrontParams, r0: f64, rho: f64) -> Cfg {
         glue_mirror: p.glue_mirror,
         cross_factor: p.cross_radius,
         reject_free_inside: p.reject_free_inside,
+        free_inside_h: p.free_inside_height * rho,
+        free_inside_rel: p.free_inside_rel,
         front_inside_check: p.front_inside_check,
         fill_any_angle: p.fill_any_angle,
         sector_check: p.sector_check,
@@ -272,10 +274,16 @@ fn mesher_cfg(p: &PriorityFrontParams, r0: f64, rho: f64) -> Cfg {
             p.free_elevation_max_deg.to_radians().sin()
         },
         height_r: p.free_height_max / p.k,
+        cos_front: if p.front_normal_max_deg >= 180.0 {
+            -2.0
+        } else {
+            p.front_normal_max_deg.to_radians().cos()
+        },
         support_k: p.support_neighbours,
         support_tol: p.support_tolerance * rho,
         support_radius: p.support_radius,
         support_share: p.support_share,
+        support_crease: p.support_crease,
     }
 }
 
@@ -421,7 +429,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I8=support:k{},share{},tol{}rho,r{}R cross={}R free_inside={} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -436,12 +444,16 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.restart_max_flatness,
         p.free_elevation_max_deg,
         p.free_height_max,
+        p.front_normal_max_deg,
         p.support_neighbours,
         p.support_share,
         p.support_tolerance,
         p.support_radius,
+        p.support_crease,
         p.cross_radius,
         p.reject_free_inside,
+        p.free_inside_height,
+        p.free_inside_rel,
         p.front_inside_check,
         p.close_holes_max,
         p.stitch_zip,

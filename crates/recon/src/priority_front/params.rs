@@ -72,9 +72,24 @@ pub struct PriorityFrontParams {
     /// Radius, in units of R, of the neighbourhood whose front edges the 2-D crossing test
     /// checks (spec §4.4 Step 4: 2).
     pub cross_radius: f64,
-    /// Optional strictness flag of spec §4.4 (not in the paper; default false): reject t
-    /// when another Free point projects strictly inside the 2-D triangle (a, t, b).
+    /// Optional strictness flag of spec §4.4 (not in the paper): reject t when another
+    /// Free point projects strictly inside the 2-D triangle (a, t, b). Default **true**, a
+    /// deviation from the spec's false (issue 20): a Free point under a triangle can never
+    /// be meshed without a fold, and on non-uniform real vertex sets such covered points
+    /// were where the front later folded over the mesh (self-intersections, false
+    /// handles); see docs/methods/priority_front.md, "Real data".
     pub reject_free_inside: bool,
+    /// With `reject_free_inside`: only Free points within this height, in units of ρ, of
+    /// the plane of (a, t, b) block it (IMPL-CHOICE I12, not in the spec; default 0.5;
+    /// 1000 = every Free point, the spec's flag). Points well off the triangle's plane
+    /// (outliers, the other sheet of a thin part) then do not block it.
+    pub free_inside_height: f64,
+    /// With `reject_free_inside`: Free points within this share of the triangle's
+    /// longest edge of its plane block it too, when that is more than
+    /// `free_inside_height` ρ (IMPL-CHOICE I12; default 0.25; 0 = the absolute bound
+    /// alone). Long triangles on a curved surface rise farther above the points they
+    /// cover.
+    pub free_inside_rel: f64,
     /// Reject a candidate when a front vertex near the edge projects strictly inside the
     /// 2-D triangle (a, t, b) (IMPL-CHOICE I6, not in the paper; default true): the
     /// triangle would fold over the front, which the edge-crossing test misses when a
@@ -102,6 +117,14 @@ pub struct PriorityFrontParams {
     /// surface a single accepted point can lie when it is the only candidate left.
     /// 1000 disables it.
     pub free_height_max: f64,
+    /// Largest angle, degrees, between the fan normal of a *front* candidate t (link /
+    /// glue; FILL is exempt) and the fan normal at the popped edge (IMPL-CHOICE I10,
+    /// not in the paper; default 150). The two sheets of a thin part are meshed with
+    /// opposite orientations; the paper's Rule 2 compares the new triangle with the one
+    /// triangle across the edge only, so a link or glue to the other sheet's front
+    /// passes it (the triangle stands at about 90° to both) and bridges the sheets.
+    /// 180 = off (the paper).
+    pub front_normal_max_deg: f64,
     /// Neighbours of the support test of IMPL-CHOICE I8 (not in the paper; default
     /// 12): a Free candidate above the I5 height cap (but within the elevation bound) is
     /// still accepted when all its this many nearest other points lie within R and a
@@ -113,6 +136,12 @@ pub struct PriorityFrontParams {
     pub support_tolerance: f64,
     /// Share of the neighbours the I8 support plane must hold (default 0.5).
     pub support_share: f64,
+    /// IMPL-CHOICE I11 (not in the paper; default true): a Free candidate let in by the
+    /// I8 support test must lie on a plane that meets the tangent plane at the edge
+    /// midpoint o within the candidate's distance from o, as the far face of a crease
+    /// does. The other sheet of a thin part (parallel to this one, within R) fails, and
+    /// is no longer bridged. false = I8 alone.
+    pub support_crease: bool,
     /// Slab stitch (threads > 1): grow each Free band from the even-numbered slab's
     /// front first, then all fronts (default true); false = all fronts at once.
     pub stitch_one_sided: bool,
@@ -168,16 +197,23 @@ impl Default for PriorityFrontParams {
             link_prev: true,
             glue_mirror: true,
             cross_radius: 2.0,
-            reject_free_inside: false,
+            // DEVIATION (issue 20): the spec's default is false; on real vertex sets
+            // covered Free points were where the front folded over the mesh
+            // (docs/methods/priority_front.md, "Deviation: reject_free_inside").
+            reject_free_inside: true,
+            free_inside_height: 0.5,
+            free_inside_rel: 0.25,
             front_inside_check: true,
             fill_any_angle: true,
             sector_check: true,
             revisit_passes: 4,
             free_elevation_max_deg: 30.0,
             free_height_max: 0.5,
+            front_normal_max_deg: 150.0,
             support_neighbours: 12,
             support_tolerance: 0.25,
             support_share: 0.5,
+            support_crease: true,
             support_radius: 2.0,
             stitch_one_sided: true,
             stitch_zip: true,
@@ -261,6 +297,24 @@ impl PriorityFrontParams {
                 format!("must be in (0, 1000], got {}", self.free_height_max),
             ));
         }
+        if !(self.front_normal_max_deg > 0.0 && self.front_normal_max_deg <= 180.0) {
+            return Err(bad(
+                "front_normal_max_deg",
+                format!("must be in (0, 180], got {}", self.front_normal_max_deg),
+            ));
+        }
+        if !(self.free_inside_height > 0.0 && self.free_inside_height <= 1000.0) {
+            return Err(bad(
+                "free_inside_height",
+                format!("must be in (0, 1000], got {}", self.free_inside_height),
+            ));
+        }
+        if !(0.0..=10.0).contains(&self.free_inside_rel) {
+            return Err(bad(
+                "free_inside_rel",
+                format!("must be in [0, 10], got {}", self.free_inside_rel),
+            ));
+        }
         if self.support_neighbours > 1000 {
             return Err(bad("support_neighbours", "must be <= 1000"));
         }
@@ -301,6 +355,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "k",
         Unit::Spacing,
         "candidate ball radius R = k * rho (paper: 4)",
+    ),
+    ParamDoc::new(
+        "free_inside_rel",
+        Unit::None,
+        "I12: Free points within this share of the triangle's longest edge of its plane block it too (0.25)",
     ),
     ParamDoc::new(
         "alpha_max_deg",
@@ -368,7 +427,12 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
     ParamDoc::new(
         "reject_free_inside",
         Unit::Flag,
-        "reject t when a Free point lies inside (a,t,b) in 2-D (off)",
+        "reject t when a Free point lies inside (a,t,b) in 2-D (true; spec: false; issue 20)",
+    ),
+    ParamDoc::new(
+        "free_inside_height",
+        Unit::Spacing,
+        "I12: with reject_free_inside, only Free points this close to the triangle's plane block it, in rho (0.5; 1000 = all)",
     ),
     ParamDoc::new(
         "front_inside_check",
@@ -401,6 +465,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "max height of a Free candidate above the fan tangent plane, in rho (I5: 0.5)",
     ),
     ParamDoc::new(
+        "front_normal_max_deg",
+        Unit::Deg,
+        "I10: max angle between the fan normals of a front candidate and of the edge (150; 180 = off)",
+    ),
+    ParamDoc::new(
         "support_neighbours",
         Unit::Count,
         "I8: neighbours of the support plane that lets a Free point above the I5 cap in (12; 0 = off)",
@@ -429,6 +498,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "support_share",
         Unit::None,
         "I8: share of the neighbours the support plane must hold (0.5)",
+    ),
+    ParamDoc::new(
+        "support_crease",
+        Unit::Flag,
+        "I11: an I8-supported point must lie on a plane meeting the edge's tangent plane near it (true)",
     ),
     ParamDoc::new(
         "close_holes_max",

@@ -220,8 +220,24 @@ impl Mesher<'_> {
                 if h * h > se * se * v.length_squared() {
                     return None;
                 }
-                if h > self.cfg.height_r * self.cfg.r && !self.supported(t) {
-                    return None;
+                if h > self.cfg.height_r * self.cfg.r {
+                    if !self.supported(t) {
+                        return None;
+                    }
+                    // IMPL-CHOICE I11 (not in the paper): the supporting plane must be
+                    // that of a face across a crease, i.e. meet the tangent plane at o
+                    // no farther from t than o is. Going down the support plane from t,
+                    // the height h falls at the rate sin(phi) (phi: angle between the
+                    // plane and the tangent plane), so the meeting line lies h / sin(phi)
+                    // from t. The other sheet of a thin part (parallel, sin(phi) ~ 0)
+                    // never meets it: I8 alone lets that sheet in and bridges the two.
+                    if self.cfg.support_crease {
+                        let ns = self.sup_nrm.get(&t).copied().unwrap_or(nv);
+                        let sin_phi = ns.cross(nv).length();
+                        if h > sin_phi * v.length() {
+                            return None;
+                        }
+                    }
                 }
             }
         } else {
@@ -231,6 +247,15 @@ impl Mesher<'_> {
                 return None;
             }
             fill = (ta && bt) || (self.revisiting && (ta || bt));
+            // IMPL-CHOICE I10 (not in the paper): a front point whose fan faces away
+            // from the fan at the edge lies on the other sheet of a thin part, meshed
+            // with the opposite orientation; linking or gluing to it would bridge them.
+            if !(ta && bt) && self.cfg.cos_front > -1.0 {
+                let nt = self.vn[t as usize];
+                if nt.dot(nv) < self.cfg.cos_front * nt.length() {
+                    return None;
+                }
+            }
         }
         // IMPL-CHOICE I3: a FILL has exactly one possible triangle (the 3-edge hole);
         // with `fill_any_angle` Rule 1 is waived for it (only the degeneracy guard
@@ -311,7 +336,15 @@ impl Mesher<'_> {
         let mut dirs = std::mem::take(&mut self.sup_dirs);
         dirs.clear();
         dirs.extend(buf.iter().map(|&(_, q)| self.pts[q as usize] - pt));
-        let ok = buf.len() >= k && self.plane_through(&dirs);
+        let plane = if buf.len() >= k {
+            self.plane_through(&dirs)
+        } else {
+            None
+        };
+        if let Some(n) = plane {
+            self.sup_nrm.insert(t, n);
+        }
+        let ok = plane.is_some();
         self.sup_dirs = dirs;
         self.sup_buf = buf;
         ok
@@ -320,8 +353,9 @@ impl Mesher<'_> {
     /// True when some plane through the point and two of its neighbours (`d`: the
     /// neighbours minus the point) passes within the support tolerance of at least
     /// `support_share` of all of them (IMPL-CHOICE I8). Pairs nearly collinear with the
-    /// point (sine of their angle below 0.2) are skipped.
-    fn plane_through(&self, d: &[DVec3]) -> bool {
+    /// point (sine of their angle below 0.2) are skipped. Returns the unit normal of the
+    /// first such plane.
+    fn plane_through(&self, d: &[DVec3]) -> Option<DVec3> {
         let tol = self.cfg.support_tol;
         let need = (self.cfg.support_share * d.len() as f64).ceil() as usize;
         for i in 0..d.len() {
@@ -334,11 +368,11 @@ impl Mesher<'_> {
                 let tl = tol * l2.sqrt();
                 let m = d.iter().filter(|q| q.dot(n).abs() <= tl).count();
                 if m >= need {
-                    return true;
+                    return Some(n / l2.sqrt());
                 }
             }
         }
-        false
+        None
     }
 
     /// Second triangle `(x, y, z)` of a glue repair: Rule 1 (all angles), degeneracy,
@@ -526,16 +560,41 @@ impl Mesher<'_> {
             self.stats.cross_rejects += 1;
             return None;
         }
-        if self.cfg.reject_free_inside {
+        // A FILL closes a 3-edge hole, its only possible triangle: a Free point inside
+        // does not block it (it could never be meshed either way).
+        let is_fill = self.state[t as usize] != FREE
+            && self.e_b[self.fout[b as usize] as usize] == t
+            && self.e_a[self.fin[a as usize] as usize] == t;
+        // Spec §4.4 optional strictness flag; DEVIATION: on by default (issue 20).
+        if self.cfg.reject_free_inside && !is_fill {
             let (u, v) = plane_basis(np);
             let tri = [a, t, b].map(|i| {
                 let q = self.pts[i as usize] - o;
                 [q.dot(u), q.dot(v)]
             });
+            // IMPL-CHOICE I12: only Free points near the triangle's plane block it. The
+            // triangle lies within `rt` of `o`, so farther points are skipped unprojected.
+            let (pa, pt, pb) = (
+                self.pts[a as usize],
+                self.pts[t as usize],
+                self.pts[b as usize],
+            );
+            let lmax2 = (pt - pa)
+                .length_squared()
+                .max((pb - pt).length_squared())
+                .max((pb - pa).length_squared());
+            let hmax = self
+                .cfg
+                .free_inside_h
+                .max(self.cfg.free_inside_rel * lmax2.sqrt());
+            let rt2 = rt * rt;
             for &f in &self.free_near {
                 if f != t {
                     let q = self.pts[f as usize] - o;
-                    if inside_2d(tri, [q.dot(u), q.dot(v)]) {
+                    if q.length_squared() < rt2
+                        && inside_2d(tri, [q.dot(u), q.dot(v)])
+                        && (self.pts[f as usize] - pa).dot(c.n_new).abs() <= hmax
+                    {
                         return None;
                     }
                 }
