@@ -1,18 +1,28 @@
-//! Delaunay hole closure: a step after the UFM loop (a deviation, not in the thesis) that
-//! closes the holes the loop leaves with Delaunay triangles, independently of umbrellas.
+//! Delaunay hole closure: a step after the UFM loop (`mode = "closed"`; a deviation, not
+//! in the thesis) that closes the holes the loop leaves, independently of umbrellas.
 //!
-//! The matched facets form an edge-manifold set of Delaunay triangles. Where the loop
-//! stalls, the set has holes, and some points have pinched fans (two or more disks
-//! sharing the vertex). The closure first opens every pinch (it keeps the largest fan at a
-//! pinched vertex and removes the faces of the others), then grows the surface from the
-//! hole boundaries: a boundary edge `ab` of face `abd` is extended by the Delaunay
-//! triangle `abc` that continues `abd` most flatly (smallest turn: pi minus the angle
-//! between `d` and `c` seen along `ab`), provided the result stays a 2-manifold (each edge
-//! in at most two faces, every vertex a single disk or a single fan with one gap) and the
-//! turn is at most `max_turn`. Extensions are taken flattest first across all holes (one
-//! priority queue), so a hole is closed from its flattest side inwards. Delaunay
-//! triangles never cross each other, so the output stays free of self-intersections; its
-//! vertices remain input points (interpolation).
+//! The loop's matched facets form an edge-manifold set of Delaunay triangles with holes,
+//! pinched vertices (two or more fans sharing a vertex), sliver bubbles and, after the
+//! fold repair, sometimes a twisted strip. In order, [`close`]:
+//!
+//! 1. *untwists*: orients every piece and drops a face at each edge whose two faces
+//!    disagree, until the surface is orientable;
+//! 2. *pops* pieces of at most [`MAX_BUBBLE`] faces (bubbles and crumbs; never the largest);
+//! 3. *unpinches*: keeps the largest fan at a pinched vertex;
+//! 4. *grows* from the hole boundaries: a boundary edge `ab` of face `abd` is extended by
+//!    the Delaunay triangle `abc` that continues `abd` most flatly (turn = pi minus the
+//!    angle between `d` and `c` seen along `ab`, at most `max_turn`; new edges at most
+//!    [`MAX_SIZE`] local edge lengths), keeping edges in at most two faces, the surface
+//!    orientable and every vertex one fan, or two fans of different pieces (a bridge
+//!    between two fronts, merged when they meet; two loops of one piece are never joined,
+//!    which would make a handle). All holes share one flattest-first queue; 2-4 repeat
+//!    for up to [`ROUNDS`] rounds;
+//! 5. fills the holes no Delaunay triangle can close (at most [`MAX_FILL`] edges) with the
+//!    least-area triangulation of the loop, preferring one that crosses no nearby face;
+//! 6. inserts every point the surface has not reached into the face it projects into.
+//!
+//! Delaunay triangles never cross each other, so only steps 5 and 6 can create
+//! self-intersections; every input point stays a vertex (interpolation).
 
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap, HashSet};
