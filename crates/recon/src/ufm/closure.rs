@@ -7,16 +7,16 @@
 //!
 //! 1. *untwists*: orients every piece and drops a face at each edge whose two faces
 //!    disagree, until the surface is orientable;
-//! 2. *pops* pieces of at most [`MAX_BUBBLE`] faces (bubbles and crumbs; never the largest);
+//! 2. *pops* pieces of at most `MAX_BUBBLE` (8) faces (bubbles and crumbs; never the largest);
 //! 3. *unpinches*: keeps the largest fan at a pinched vertex;
 //! 4. *grows* from the hole boundaries: a boundary edge `ab` of face `abd` is extended by
 //!    the Delaunay triangle `abc` that continues `abd` most flatly (turn = pi minus the
 //!    angle between `d` and `c` seen along `ab`, at most `max_turn`; new edges at most
-//!    [`MAX_SIZE`] local edge lengths), keeping edges in at most two faces, the surface
+//!    2.5 local edge lengths (`MAX_SIZE`)), keeping edges in at most two faces, the surface
 //!    orientable and every vertex one fan, or two fans of different pieces (a bridge
 //!    between two fronts, merged when they meet; two loops of one piece are never joined,
 //!    which would make a handle). All holes share one flattest-first queue; 2-4 repeat
-//!    for up to [`ROUNDS`] rounds;
+//!    for up to 4 rounds (`ROUNDS`);
 //! 5. fills the holes no Delaunay triangle can close (at most [`MAX_FILL`] edges) with the
 //!    least-area triangulation of the loop, preferring one that crosses no nearby face;
 //! 6. inserts every point the surface has not reached into the face it projects into.
@@ -123,7 +123,7 @@ impl<'a> Surface<'a> {
         s
     }
 
-    /// Removes the bubbles and crumbs: pieces of at most [`MAX_BUBBLE`] faces, closed
+    /// Removes the bubbles and crumbs: pieces of at most `MAX_BUBBLE` (8) faces, closed
     /// (the flat tetrahedra whose four faces are matched at every corner, the loop's
     /// first fixed point, `docs/methods/ufm.md`) or open (left over by the unpinching).
     /// Their points become free for the growth. Returns the faces removed.
@@ -755,7 +755,7 @@ impl<'a> Surface<'a> {
 pub enum Reject {
     /// It turns by more than `max_turn` against its neighbour (folds back).
     Turn,
-    /// Its new edges are longer than [`MAX_SIZE`] local edge lengths.
+    /// Its new edges are longer than 2.5 local edge lengths (`MAX_SIZE`).
     Size,
     /// Adding it would make an edge or a vertex non-manifold.
     Manifold,
