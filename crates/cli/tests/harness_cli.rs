@@ -120,8 +120,43 @@ fn one_shot_verbs_write_their_outputs() {
         "-o",
         mesh.to_str().unwrap(),
     ]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "a missing parameter is bad input"
+    );
     assert!(String::from_utf8_lossy(&out.stderr).contains("shape"));
+    // An output that cannot hold the result is refused before any work.
+    for bad in ["mesh.txt", "mesh.xyz", "no/such/dir/mesh.ply"] {
+        let out = reconbench(&[
+            "reconstruct",
+            "--method",
+            "ufm",
+            cloud.to_str().unwrap(),
+            "-o",
+            dir.path().join(bad).to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{bad}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    // What a method cannot do with its input is bad input too.
+    let two = dir.path().join("two.xyz");
+    std::fs::write(&two, "0 0 0\n1 0 0\n").unwrap();
+    let out = reconbench(&[
+        "reconstruct",
+        "--method",
+        "ufm",
+        two.to_str().unwrap(),
+        "-o",
+        mesh.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     // Wrong kind and unknown parameters are input errors.
     let out = reconbench(&[
         "normals",

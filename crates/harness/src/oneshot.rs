@@ -6,7 +6,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use reconbench_geom::method::{FeatureClass, RunCtx};
+use reconbench_geom::io::Format;
+use reconbench_geom::method::{FeatureClass, MethodError, RunCtx};
 use reconbench_geom::{Channel, PointCloud};
 use serde::Serialize;
 use serde_json::Value;
@@ -65,6 +66,7 @@ pub fn run(
         )));
     }
     let params = entry.resolve_params(overrides)?;
+    check_output(output, kind)?;
     let cloud =
         reconbench_geom::io::read_cloud(input).map_err(|e| HarnessError::input(e.to_string()))?;
     crate::pipeline::check_input_needs(entry, cloud.normals().is_some(), None)
@@ -77,7 +79,13 @@ pub fn run(
     let mut ctx = RunCtx::new(seed);
     let mut summary = BTreeMap::new();
     let t0 = Instant::now();
-    let method_err = |e| HarnessError::failure(format!("{name}: {e}"));
+    // What the input or a parameter cannot give is bad input (exit code 2 on the CLI).
+    let method_err = |e: MethodError| match e {
+        MethodError::InvalidInput(_) | MethodError::InvalidParameter { .. } => {
+            HarnessError::input(format!("{name}: {e}"))
+        }
+        _ => HarnessError::failure(format!("{name}: {e}")),
+    };
     let diagnostics = match built {
         Built::Reconstruct(m) => {
             let r = m.reconstruct(&cloud, &mut ctx).map_err(method_err)?;
@@ -147,4 +155,27 @@ pub fn run(
         phases: ctx.phases(),
         diagnostics: crate::cell::diagnostics_json(&diagnostics),
     })
+}
+
+/// Checks, before any work, that `output` names a format that can hold the result (a
+/// reconstruction needs a mesh format) in a directory that exists.
+fn check_output(output: &Path, kind: MethodKind) -> Result<()> {
+    let format = Format::from_path(output).map_err(|e| HarnessError::input(e.to_string()))?;
+    if kind == MethodKind::Reconstruct && matches!(format, Format::Xyz | Format::Pts) {
+        return Err(HarnessError::input(format!(
+            "{}: a .{} file holds points only; write the mesh as .ply, .obj, .off, .stl or .m",
+            output.display(),
+            format.name()
+        )));
+    }
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        return Err(HarnessError::input(format!(
+            "{}: the directory {} does not exist",
+            output.display(),
+            dir.display()
+        )));
+    }
+    Ok(())
 }
