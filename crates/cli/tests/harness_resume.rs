@@ -153,3 +153,42 @@ fn a_worker_killed_from_outside_fails_only_its_cell() {
     );
     assert_eq!(rows[1]["status"], "ok");
 }
+
+/// A second run into the same results neither overwrites nor appends silently: it
+/// refuses (exit 2, one line, before any work) unless told to resume or to start afresh,
+/// and `--fresh` keeps the earlier rows under `previous/`.
+#[test]
+fn earlier_results_are_never_overwritten_silently() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = write(
+        dir.path(),
+        "quick.toml",
+        "seeds = 2\n[[datasets]]\nshape = \"sphere\"\npoints = 100\n[[methods]]\nname = \"gt-normals\"\n[report]\nplots = false\nrenders = false\n",
+    );
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["run", exp.to_str().unwrap(), "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        reconbench(&args)
+    };
+    ok(&run(&[]));
+    let before = std::fs::read(out.join("results.jsonl")).unwrap();
+    let again = run(&[]);
+    assert_eq!(again.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(err.contains("--resume") && err.contains("--fresh"), "{err}");
+    assert_eq!(std::fs::read(out.join("results.jsonl")).unwrap(), before);
+    ok(&run(&["--resume"]));
+    ok(&run(&["--fresh"]));
+    let prev: Vec<_> = std::fs::read_dir(out.join("previous"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(prev.len(), 1);
+    assert_eq!(
+        std::fs::read(prev[0].join("results.jsonl")).unwrap(),
+        before
+    );
+    assert!(prev[0].join("manifest.json").is_file());
+    assert_eq!(rows(&out).len(), 2);
+}

@@ -42,6 +42,9 @@ pub struct RunOptions {
     pub resume: bool,
     /// With `resume`: run again the cells whose row is not `ok`.
     pub retry_failed: bool,
+    /// Move earlier results aside (to `previous/<time>/` in the results directory)
+    /// instead of refusing to overwrite them.
+    pub fresh: bool,
     /// Run only shard `i` of `n`.
     pub shard: Option<(usize, usize)>,
     /// Worker command: program and leading arguments (e.g. `[current_exe, "worker"]`).
@@ -139,6 +142,7 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let (results_name, manifest_name) = result_file_names(opts.shard);
     let results = opts.out_dir.join(&results_name);
     let manifest_path = opts.out_dir.join(manifest_name);
+    set_aside_earlier(opts, &results, &manifest_path)?;
     // One run per results file at a time (shards write their own files).
     let _lock = crate::lock::RunLock::acquire(&opts.out_dir.join(format!("{results_name}.lock")))?;
     let cells = shard_cells(&exp.cells, opts.shard);
@@ -164,6 +168,50 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
         results,
         manifest: manifest_path,
     })
+}
+
+/// Without `--resume`, earlier rows are never overwritten silently: with `fresh` the
+/// results file and its manifest move to `previous/<UTC time>/`, otherwise the run
+/// refuses (before any work) and says how to go on.
+fn set_aside_earlier(opts: &RunOptions, results: &Path, manifest: &Path) -> Result<()> {
+    if opts.resume || !results.exists() {
+        return Ok(());
+    }
+    let (rows, _) = read_rows(results)?;
+    if rows.is_empty() {
+        return Ok(());
+    }
+    if !opts.fresh {
+        return Err(HarnessError::input(format!(
+            "{} holds {} rows of an earlier run; --resume continues it, --fresh moves it aside \
+             to {}/previous/, --out writes elsewhere",
+            results.display(),
+            rows.len(),
+            opts.out_dir.display()
+        )));
+    }
+    let stamp = crate::provenance::now_rfc3339().replace(':', "");
+    let base = opts.out_dir.join("previous");
+    let dest = (0..)
+        .map(|k| {
+            if k == 0 {
+                base.join(&stamp)
+            } else {
+                base.join(format!("{stamp}-{k}"))
+            }
+        })
+        .find(|d| !d.exists())
+        .unwrap_or_else(|| base.join(&stamp));
+    crate::error::create_dir_all(&dest)?;
+    for f in [results, manifest] {
+        if let Some(name) = f.file_name()
+            && f.exists()
+        {
+            let to = dest.join(name);
+            std::fs::rename(f, &to).map_err(|e| HarnessError::io(f, e))?;
+        }
+    }
+    Ok(())
 }
 
 /// The per-cell limits of a run.

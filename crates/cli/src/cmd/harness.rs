@@ -97,6 +97,10 @@ pub struct RunArgs {
     /// With --resume: run again the cells whose row is not ok.
     #[arg(long, requires = "resume")]
     retry_failed: bool,
+    /// Move the earlier results of this experiment aside (to <out>/previous/<time>/) and
+    /// start again; without it (or --resume) a run refuses to overwrite them.
+    #[arg(long, conflicts_with = "resume")]
+    fresh: bool,
     /// Run only shard i of N (0 <= i < N): every N-th cell starting at i.
     #[arg(long, value_name = "i/N")]
     shard: Option<String>,
@@ -311,6 +315,7 @@ fn run_experiment(a: RunArgs) -> CliResult {
         jobs,
         resume: a.resume,
         retry_failed: a.retry_failed,
+        fresh: a.fresh,
         shard,
         worker: vec![exe.into_os_string(), OsString::from("worker")],
         timeout_s: a.timeout,
