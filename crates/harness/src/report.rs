@@ -529,7 +529,7 @@ fn write_kind_section(
     let mut table_files = Vec::new();
     let stem = t.kind.as_str();
     let _ = writeln!(md, "## {}\n", kind_title(t.kind));
-    md.push_str("Mean ± std over seeds; best of each dataset and perturbation in bold; ↑ higher is better, ↓ lower is better.\n\n");
+    md.push_str("Mean ± std over seeds; best of each dataset and perturbation in bold; ↑ higher is better, ↓ lower is better; oracles (handed the ground truth: the floor or ceiling a method can reach) in italics and never bold.\n\n");
     md.push_str(&tables::markdown(t));
     let mut links = Vec::new();
     for fmt in &opts.tables {

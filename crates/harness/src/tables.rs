@@ -42,6 +42,9 @@ pub struct TableRow {
     pub values: Vec<Option<Stat>>,
     /// Whether the value is the best of its block.
     pub best: Vec<bool>,
+    /// Whether the method is an oracle (handed the ground truth): shown apart, in
+    /// italics, and never counted as best.
+    pub oracle: bool,
 }
 
 /// Metric columns for `kind`: the requested ones that occur, else the defaults that occur.
@@ -92,9 +95,11 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
                     })
                     .collect(),
                 best: vec![false; columns.len()],
+                oracle: crate::registry::find(&g.method).is_ok_and(|e| e.needs_ground_truth),
             })
             .collect();
-        // Best per column within each (dataset, perturbation) block.
+        // Best per column within each (dataset, perturbation) block, among the methods
+        // that had to work for it (not the oracles).
         for ci in 0..columns.len() {
             let up = higher_is_better(&columns[ci]);
             let mut blocks: Vec<(String, String)> = rows
@@ -104,7 +109,7 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
             blocks.dedup();
             for (d, p) in blocks {
                 let idx: Vec<usize> = (0..rows.len())
-                    .filter(|&i| rows[i].dataset == d && rows[i].perturb == p)
+                    .filter(|&i| rows[i].dataset == d && rows[i].perturb == p && !rows[i].oracle)
                     .collect();
                 if idx.len() < 2 {
                     continue;
@@ -192,7 +197,11 @@ pub fn markdown(t: &Table) -> String {
             "| {} | {} | {} | {}/{} |",
             md_escape(&r.dataset),
             md_escape(&r.perturb),
-            md_escape(&r.method),
+            if r.oracle {
+                format!("*{}* (oracle)", md_escape(&r.method))
+            } else {
+                md_escape(&r.method)
+            },
             r.ok,
             r.cells
         );
@@ -259,7 +268,11 @@ pub fn latex(t: &Table, caption: &str) -> String {
             "{} & {} & {}",
             tex_escape(&r.dataset),
             tex_escape(&r.perturb),
-            tex_escape(&r.method)
+            if r.oracle {
+                format!("\\textit{{{}}} (oracle)", tex_escape(&r.method))
+            } else {
+                tex_escape(&r.method)
+            }
         );
         for (v, b) in r.values.iter().zip(&r.best) {
             let text = match v {
@@ -347,5 +360,57 @@ mod tests {
         assert_eq!(fmt_num(0.0), "0");
         assert_eq!(tex_escape("a_b & 5%"), "a\\_b \\& 5\\%");
         assert_eq!(csv_field("a,b"), "\"a,b\"");
+    }
+
+    fn group(method: &str, mean: f64) -> Group {
+        let stat = Stat {
+            n: 1,
+            mean,
+            std: 0.0,
+            ci95: f64::NAN,
+            min: mean,
+            max: mean,
+        };
+        Group {
+            config: method.into(),
+            index: 0,
+            labels: crate::experiment::Labels {
+                dataset: "sphere".into(),
+                perturb: "clean".into(),
+                method: method.into(),
+            },
+            method: method.into(),
+            kind: MethodKind::Normals,
+            params: serde_json::Value::Null,
+            data: crate::inputs::DataSpec {
+                shape: "sphere".into(),
+                sampler: "uniform".into(),
+                points: 10,
+                perturb: Default::default(),
+                scan: None,
+                file: None,
+            },
+            cells: 1,
+            ok: 1,
+            metrics: [("normal_mean_deg".to_string(), stat)].into(),
+            cost: [("method_s".to_string(), stat)].into(),
+            dist: None,
+        }
+    }
+
+    #[test]
+    fn oracles_are_shown_apart_and_never_best() {
+        let groups = vec![
+            group("gt-normals", 0.0),
+            group("pf", 2.0),
+            group("jet", 1.0),
+        ];
+        let t = &build(&groups, &[])[0];
+        let row = |m: &str| t.rows.iter().find(|r| r.method == m).unwrap();
+        assert!(row("gt-normals").oracle && !row("pf").oracle);
+        assert!(row("gt-normals").best.iter().all(|b| !b));
+        assert!(row("jet").best[0], "the best real method is bold");
+        let md = markdown(t);
+        assert!(md.contains("*gt-normals* (oracle)"), "{md}");
     }
 }
