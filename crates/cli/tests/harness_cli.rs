@@ -59,6 +59,21 @@ fn unknown_keys_and_methods_are_input_errors_listing_valid_ones() {
     let out = reconbench(&["run", bad_pert.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("noise"));
+    // A file that is not UTF-8 text, and a missing one, are named input errors.
+    let binary = dir.path().join("binary.toml");
+    std::fs::write(&binary, [0xff, 0xfe, 0x00, 0x41]).unwrap();
+    for (f, want) in [
+        (binary.clone(), "not UTF-8"),
+        (dir.path().join("missing.toml"), "no such file"),
+    ] {
+        let out = reconbench(&["run", f.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{}", f.display());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(want) && err.contains(f.file_name().unwrap().to_str().unwrap()),
+            "{err}"
+        );
+    }
 }
 
 #[test]

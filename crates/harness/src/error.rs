@@ -50,9 +50,19 @@ impl HarnessError {
 /// Result alias of the harness.
 pub type Result<T, E = HarnessError> = std::result::Result<T, E>;
 
-/// Reads a whole file, naming it on error.
+/// Reads a whole text file, naming it on error; a missing file or one that is not UTF-8
+/// text is bad input (exit code 2 on the CLI).
 pub(crate) fn read_to_string(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| HarnessError::io(path, e))
+    std::fs::read_to_string(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => {
+            HarnessError::input(format!("{}: no such file", path.display()))
+        }
+        std::io::ErrorKind::InvalidData => HarnessError::input(format!(
+            "{}: not UTF-8 text (a TOML or JSON file is expected)",
+            path.display()
+        )),
+        _ => HarnessError::io(path, e),
+    })
 }
 
 /// Creates a directory and its parents, naming it on error.
