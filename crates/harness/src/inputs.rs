@@ -273,28 +273,31 @@ pub fn generate(data: &DataSpec, shape: Option<Arc<dyn Shape>>, seed: u64) -> Re
         |e: reconbench_synth::SynthError| HarnessError::failure(format!("data generation: {e}"));
     let (mut g, aabb) = match &shape {
         Some(shape) => {
-            let g = match &data.scan {
-                Some(scan) => {
-                    let spec: ScanSpec = scan
-                        .parse()
-                        .map_err(|e| HarnessError::input(format!("scan '{scan}': {e}")))?;
-                    reconbench_synth::scanner::scan(shape.as_ref(), &spec, seed).map_err(fail)?
-                }
-                None => {
-                    let sampler: SamplerSpec = data.sampler.parse().map_err(|e| {
-                        HarnessError::input(format!("sampler '{}': {e}", data.sampler))
+            let scan: Option<ScanSpec> =
+                data.scan
+                    .as_deref()
+                    .map(str::parse)
+                    .transpose()
+                    .map_err(|e| {
+                        HarnessError::input(format!(
+                            "scan '{}': {e}",
+                            data.scan.as_deref().unwrap_or_default()
+                        ))
                     })?;
-                    let n = usize::try_from(data.points)
-                        .map_err(|_| HarnessError::input("too many points"))?;
-                    reconbench_synth::sampler::sample(
-                        shape.as_ref(),
-                        &sampler,
-                        Density::Count(n),
-                        seed,
-                    )
-                    .map_err(fail)?
-                }
-            };
+            let sampler: SamplerSpec = data
+                .sampler
+                .parse()
+                .map_err(|e| HarnessError::input(format!("sampler '{}': {e}", data.sampler)))?;
+            let n =
+                usize::try_from(data.points).map_err(|_| HarnessError::input("too many points"))?;
+            let g = reconbench_synth::sample_or_scan(
+                shape.as_ref(),
+                &sampler,
+                Density::Count(n),
+                scan.as_ref(),
+                seed,
+            )
+            .map_err(fail)?;
             (g, shape.aabb())
         }
         None => {

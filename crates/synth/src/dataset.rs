@@ -55,10 +55,7 @@ pub fn generate_for_shape(
     spec: &DatasetSpec,
     seed: u64,
 ) -> Result<GroundTruthCloud> {
-    let mut cloud = match &spec.scan {
-        Some(scan) => scanner::scan(shape, scan, seed)?,
-        None => sampler::sample(shape, &spec.sampler, spec.density, seed)?,
-    };
+    let mut cloud = sample_or_scan(shape, &spec.sampler, spec.density, spec.scan.as_ref(), seed)?;
     perturb::apply_all(
         &mut cloud,
         &spec.perturbations,
@@ -66,4 +63,19 @@ pub fn generate_for_shape(
         seed,
     )?;
     Ok(cloud)
+}
+
+/// The clean cloud of a dataset, before perturbations: a virtual scan when `scan` is
+/// given, else the sampler at the density.
+pub fn sample_or_scan(
+    shape: &dyn Shape,
+    sampler: &SamplerSpec,
+    density: Density,
+    scan: Option<&ScanSpec>,
+    seed: u64,
+) -> Result<GroundTruthCloud> {
+    match scan {
+        Some(scan) => scanner::scan(shape, scan, seed),
+        None => sampler::sample(shape, sampler, density, seed),
+    }
 }

@@ -23,7 +23,7 @@ pub mod spec;
 pub mod util;
 
 pub use cloud::{GroundTruthCloud, NO_FEATURE, NO_SOURCE};
-pub use dataset::{DatasetSpec, generate, generate_for_shape};
+pub use dataset::{DatasetSpec, generate, generate_for_shape, sample_or_scan};
 pub use error::{Result, SynthError};
 pub use perturb::{PerturbSpec, Reference};
 pub use sampler::{Density, SamplerSpec};

@@ -32,7 +32,8 @@ fn main() {
         .facets()
         .iter()
         .map(|f| {
-            let mut t = f.v.map(|v| dt.input_of_vertex(v));
+            // Back to the mesh's vertex ids (the run is on Morton-ordered points).
+            let mut t = f.v.map(|v| order[dt.input_of_vertex(v) as usize]);
             t.sort_unstable();
             t
         })
