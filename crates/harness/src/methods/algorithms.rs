@@ -4,6 +4,7 @@
 
 use reconbench_features::{GaussMap, GaussMapAdaptive, PcaVariation};
 use reconbench_filters::StatisticalOutliers;
+use reconbench_filters::{Mls, MlsSharp};
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
 use reconbench_recon::{PriorityFront, Ufm, UfmMesh};
 
@@ -21,6 +22,8 @@ pub fn entries() -> Vec<MethodEntry> {
         features::<GaussMapAdaptive>(),
         features::<PcaVariation>(),
         filter::<StatisticalOutliers>(),
+        filter::<Mls>(),
+        filter::<MlsSharp>(),
         reconstruct::<PriorityFront>(),
         reconstruct::<Ufm>(),
     ]
