@@ -1,5 +1,7 @@
 //! Surface reconstructors of reconbench, one module per method.
 //!
+//! * [`ebt`] — `ebt`, error-bounded thinning and seed-grown triangulation of Sun,
+//!   Bradley, Zhang & Loh (CAD 2001), spec 004.
 //! * [`priority_front`] — `priority-front`, the priority-driven advancing front of Li,
 //!   Han & Wee (CAD 2009), spec 001.
 //! * [`ufm`] — `ufm`, Umbrella Facet Matching (Ma 2011, ch. 3, spec 000 §1.1): a
@@ -9,8 +11,10 @@
 //! Every method implements [`reconbench_geom::method::Reconstructor`] and has a serde
 //! `Params` struct with documented defaults.
 
+pub mod ebt;
 pub mod priority_front;
 pub mod ufm;
 
+pub use ebt::{Ebt, EbtParams};
 pub use priority_front::{PriorityFront, PriorityFrontParams};
 pub use ufm::{Ufm, UfmMesh, UfmMeshParams, UfmParams};
