@@ -6,11 +6,14 @@
 //! | `statistical-outliers` | [`statistical_outliers`] | statistical outlier removal (Rusu et al. 2008; PCL, Open3D) |
 //! | `mls` | [`mls`] | projection MLS (seed 002 §2.5, §6.9; Levin, Alexa et al.) |
 //! | `mls-sharp` | [`mls_sharp`] | sharp MLS by neighbourhood modification (seed 002 §6) |
+//! | `ebt-thinning`, `random-thinning`, `grid-thinning` | [`thinning`] | EBT's error-bounded voxel thinning (seed 004 §4) and its budget baselines |
 
 pub mod mls;
 pub mod mls_sharp;
 pub mod statistical_outliers;
+pub mod thinning;
 
 pub use mls::{Mls, MlsParams};
 pub use mls_sharp::{MlsSharp, MlsSharpParams};
 pub use statistical_outliers::{StatisticalOutliers, StatisticalOutliersParams};
+pub use thinning::{EbtThinning, GridThinning, RandomThinning};

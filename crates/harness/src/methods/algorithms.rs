@@ -4,8 +4,10 @@
 
 use reconbench_features::{GaussMap, GaussMapAdaptive, PcaVariation};
 use reconbench_filters::StatisticalOutliers;
+use reconbench_filters::{EbtThinning, GridThinning, RandomThinning};
 use reconbench_filters::{Mls, MlsSharp};
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
+use reconbench_recon::Ebt;
 use reconbench_recon::{PriorityFront, Ufm, UfmMesh};
 
 use crate::entry::{MethodEntry, features, filter, normals, reconstruct};
@@ -24,7 +26,11 @@ pub fn entries() -> Vec<MethodEntry> {
         filter::<StatisticalOutliers>(),
         filter::<Mls>(),
         filter::<MlsSharp>(),
+        filter::<EbtThinning>(),
+        filter::<RandomThinning>(),
+        filter::<GridThinning>(),
         reconstruct::<PriorityFront>(),
+        reconstruct::<Ebt>(),
         reconstruct::<Ufm>(),
     ]
 }
