@@ -342,24 +342,26 @@ impl Reconstructor for TightCocone {
             &mut d,
         )?;
         ctx.checkpoint()?;
-        let _g = ctx.phase_guard("mark");
+        let g = ctx.phase_guard("good_samples");
         let triples: Vec<[u32; 3]> = initial.iter().map(|&(_, t)| t).collect();
         let good = tight::good_samples(dt.n_vertices(), &triples);
-        let mut surface = vec![false; dt.facets().len()];
-        for &(f, t) in &initial {
-            // ASSUMPTION K-05: the trusted surface triangles.
-            let trusted = match p.surface {
+        drop(g);
+        let g = ctx.phase_guard("mark");
+        // ASSUMPTION K-05: the trusted surface triangles.
+        let surface: Vec<u32> = initial
+            .iter()
+            .filter(|(_, t)| match p.surface {
                 SurfaceRule::OneGood => t.iter().any(|&v| good[v as usize]),
                 SurfaceRule::AllGood => t.iter().all(|&v| good[v as usize]),
-            };
-            surface[f as usize] = trusted;
-        }
+            })
+            .map(|&(f, _)| f)
+            .collect();
         let mut stats = tight::MarkStats {
             good: good.iter().filter(|&&g| g).count(),
             ..Default::default()
         };
         let mut inside = tight::label(&dt, &poles, &surface, &good, &mut stats);
-        drop(_g);
+        drop(g);
         // ASSUMPTION K-07 (deviation): the interface is made manifold by relabelling.
         let rep = ctx.phase("repair", || {
             repair::repair(&dt, &mut inside, p.repair_rounds)

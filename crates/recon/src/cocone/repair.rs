@@ -99,7 +99,7 @@ fn groups(dt: &Delaunay, set: &[u32], keep: &[u32], inside: &[bool]) -> Vec<(boo
 /// Relabels until the interface is a 2-manifold or `max_rounds` pass.
 pub fn repair(dt: &Delaunay, inside: &mut [bool], max_rounds: usize) -> RepairStats {
     let nt = dt.n_tets() as u32;
-    let stars = Stars::new(dt);
+    let mut stars: Option<Stars> = None;
     let mut st = RepairStats::default();
     let mut edge_set = Vec::new();
     for round in 0..=max_rounds {
@@ -111,6 +111,7 @@ pub fn repair(dt: &Delaunay, inside: &mut [bool], max_rounds: usize) -> RepairSt
             break;
         }
         st.rounds += 1;
+        let stars = stars.get_or_insert_with(|| Stars::new(dt));
         let mut touched = vec![false; inside.len()];
         let mut flips: Vec<u32> = Vec::new();
         let plan = |comp: &[u32], touched: &mut Vec<bool>, flips: &mut Vec<u32>| {

@@ -7,7 +7,7 @@ use std::collections::BinaryHeap;
 
 use reconbench_delaunay::{Delaunay, INFINITE, NO_TET};
 
-use super::poles::{OUT_FACE, Poles, apex, outward_normal};
+use super::poles::{OUT_FACE, Poles, apex};
 
 /// Which initial-surface triangles the marking treats as certain surface triangles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -102,39 +102,35 @@ impl PartialOrd for Item {
     }
 }
 
-/// Cosine of the angle at which the circumspheres of the two tetrahedra of facet `f`
-/// meet: near 1 when they intersect deeply (same side of the surface), near −1 when they
-/// barely overlap (the facet separates them). For a hull facet the outer ball is the
-/// half-space beyond the hull plane.
-fn ball_cos(dt: &Delaunay, poles: &Poles, f: u32) -> f64 {
-    let facet = dt.facets()[f as usize];
-    let (c0, r0) = (
-        poles.centres[facet.tets[0] as usize],
-        poles.radii[facet.tets[0] as usize],
-    );
+/// Cosine of the angle at which the circumspheres of tetrahedron `t` and its neighbour
+/// across face `i` meet: near 1 when they intersect deeply (same side of the surface),
+/// near −1 when they barely overlap (the face separates them). For a hull face the outer
+/// ball is the half-space beyond the hull plane.
+fn ball_cos(dt: &Delaunay, poles: &Poles, t: u32, i: usize) -> f64 {
+    let (c0, r0) = (poles.centres[t as usize], poles.radii[t as usize]);
     if !(c0.is_finite() && r0 > 0.0) {
         return 1.0;
     }
-    if facet.tets[1] == NO_TET {
+    let n = dt.tet_neighbors(t)[i];
+    if n as usize >= dt.n_tets() {
         let p = dt.vertices();
-        let n = outward_normal(p, facet.v, apex(dt.tet_vertices(facet.tets[0]), facet.v));
-        return ((c0 - p[facet.v[0] as usize]).dot(n) / r0).clamp(-1.0, 1.0);
+        let tv = dt.tet_vertices(t);
+        let [a, b, c] = OUT_FACE[i].map(|k| p[tv[k] as usize]);
+        let nrm = (b - a).cross(c - a).normalize_or_zero();
+        return ((c0 - a).dot(nrm) / r0).clamp(-1.0, 1.0);
     }
-    let (c1, r1) = (
-        poles.centres[facet.tets[1] as usize],
-        poles.radii[facet.tets[1] as usize],
-    );
+    let (c1, r1) = (poles.centres[n as usize], poles.radii[n as usize]);
     if !(c1.is_finite() && r1 > 0.0) {
         return 1.0;
     }
     ((r0 * r0 + r1 * r1 - c0.distance_squared(c1)) / (2.0 * r0 * r1)).clamp(-1.0, 1.0)
 }
 
-/// Facet id of every face of every finite tetrahedron (`4·t + i` is the face opposite
-/// vertex `i`).
-fn face_facets(dt: &Delaunay) -> Vec<u32> {
-    let mut out = vec![u32::MAX; 4 * dt.n_tets()];
-    for (f, facet) in dt.facets().iter().enumerate() {
+/// Flags the two sides (`4·t + i`, face `i` of tetrahedron `t`) of every listed facet.
+fn face_flags(dt: &Delaunay, facets: &[u32]) -> Vec<bool> {
+    let mut out = vec![false; 4 * dt.n_tets()];
+    for &f in facets {
+        let facet = dt.facets()[f as usize];
         for &t in &facet.tets {
             if t == NO_TET {
                 continue;
@@ -142,7 +138,7 @@ fn face_facets(dt: &Delaunay) -> Vec<u32> {
             let tv = dt.tet_vertices(t);
             let a = apex(tv, facet.v);
             let i = tv.iter().position(|&v| v == a).expect("apex");
-            out[4 * t as usize + i] = f as u32;
+            out[4 * t as usize + i] = true;
         }
     }
     out
@@ -157,57 +153,72 @@ fn face_facets(dt: &Delaunay) -> Vec<u32> {
 pub fn label(
     dt: &Delaunay,
     poles: &Poles,
-    surface_facets: &[bool],
+    surface_facets: &[u32],
     good: &[bool],
     stats: &mut MarkStats,
 ) -> Vec<bool> {
     let nt = dt.n_tets();
     let nall = dt.n_all_tets();
-    let ff = face_facets(dt);
+    let surface = face_flags(dt, surface_facets);
     // 0 unknown, 1 outside, 2 inside.
     let mut label = vec![0u8; nall];
+    // The certain crossings (priority above every circumball decision) wait on a stack,
+    // the circumball decisions in a max-heap on |cos|.
+    let mut certain: Vec<(u32, bool)> = Vec::new();
     let mut heap = BinaryHeap::new();
-    let push = |heap: &mut BinaryHeap<Item>, t: u32, inside: bool, stats: &mut MarkStats| {
+    let push = |t: u32,
+                inside: bool,
+                label: &[u8],
+                certain: &mut Vec<(u32, bool)>,
+                heap: &mut BinaryHeap<Item>,
+                stats: &mut MarkStats| {
         for (i, &n) in dt.tet_neighbors(t).iter().enumerate() {
-            if (n as usize) >= nt {
+            if (n as usize) >= nt || label[n as usize] != 0 {
                 continue;
             }
-            // The facet between t and n, seen from the finite side when t is a ghost.
-            let f = if (t as usize) < nt {
-                ff[4 * t as usize + i]
+            // The shared face seen from the finite side (n, face j) when t is a ghost.
+            let (ft, fi) = if (t as usize) < nt {
+                (t, i)
             } else {
-                ff[4 * n as usize + dt.mirror_face(t, i)]
+                (n, dt.mirror_face(t, i))
             };
-            let v = dt.facets()[f as usize].v;
-            let poor = v.iter().any(|&x| !good[x as usize]);
-            let (prio, flip) = if surface_facets[f as usize] {
-                (2.0, true)
-            } else if !poor {
-                (2.0, false)
-            } else {
-                let c = ball_cos(dt, poles, f);
-                stats.ball_tests += 1;
-                (c.abs(), c < 0.0)
-            };
+            if surface[4 * ft as usize + fi] {
+                certain.push((n, !inside));
+                continue;
+            }
+            let tv = dt.tet_vertices(ft);
+            if OUT_FACE[fi].iter().all(|&k| good[tv[k] as usize]) {
+                certain.push((n, inside));
+                continue;
+            }
+            let c = ball_cos(dt, poles, ft, fi);
+            stats.ball_tests += 1;
             heap.push(Item {
-                prio,
+                prio: c.abs(),
                 tet: n,
-                inside: inside != flip,
+                inside: inside != (c < 0.0),
             });
         }
     };
-    for t in nt..nall {
-        label[t] = 1;
+    for l in &mut label[nt..nall] {
+        *l = 1;
     }
     for t in nt..nall {
-        push(&mut heap, t as u32, false, stats);
+        push(t as u32, false, &label, &mut certain, &mut heap, stats);
     }
-    while let Some(Item { tet, inside, .. }) = heap.pop() {
+    loop {
+        let (tet, inside) = if let Some(x) = certain.pop() {
+            x
+        } else if let Some(Item { tet, inside, .. }) = heap.pop() {
+            (tet, inside)
+        } else {
+            break;
+        };
         if label[tet as usize] != 0 {
             continue;
         }
         label[tet as usize] = if inside { 2 } else { 1 };
-        push(&mut heap, tet, inside, stats);
+        push(tet, inside, &label, &mut certain, &mut heap, stats);
     }
     let inside: Vec<bool> = label.iter().map(|&l| l == 2).collect();
     stats.inside = inside.iter().filter(|&&x| x).count();
