@@ -142,6 +142,7 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             let t = Instant::now();
             out.diagnostics = diagnostics_json(&r.diagnostics);
             let outliers_in = data.is_outlier.iter().filter(|&&o| o).count();
+            let input_before = data.input.positions().to_vec();
             crate::pipeline::replace_cloud(&mut data, r, n_in, shape.as_deref())
                 .map_err(|e| format!("method: {e}"))?;
             let outliers_out = data.is_outlier.iter().filter(|&&o| o).count();
@@ -157,6 +158,14 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
                 None => Vec::new(),
             };
             out.metrics = filter_metrics(n_in, data.input.len(), outliers_in, outliers_out, &d);
+            out.metrics.extend(projection_metrics(
+                &data.input,
+                &input_before,
+                shape.as_deref(),
+                reference.as_ref(),
+                diag,
+                opts.features.feature_angle_deg,
+            )?);
             out.dist = Dist::of("point distance (diag)", &d);
             out.metrics_s = t.elapsed().as_secs_f64();
         }
@@ -305,6 +314,61 @@ fn without_ground_truth(
     let mut row = reconbench_metrics::eval_topology(mesh, None, &o.topology).to_row();
     row.extend(reconbench_metrics::eval_quality(mesh, &o.quality).to_row());
     row
+}
+
+/// Metrics of a projecting filter (seed 002 ch. 4, `reconbench_metrics::filter_eval`):
+/// distance of the output to the filter's input and to the surface, normal error near
+/// and away from the true features, and the error of the feature lines `mls-sharp`
+/// attaches as channels.
+fn projection_metrics(
+    output: &reconbench_geom::PointCloud,
+    input: &[reconbench_geom::DVec3],
+    shape: Option<&dyn Shape>,
+    reference: Option<&Reference>,
+    diag: f64,
+    feature_angle_deg: f64,
+) -> std::result::Result<BTreeMap<String, f64>, String> {
+    use reconbench_filters::mls_sharp::{LINE_CHANNELS, LINE_FLAG_CHANNEL};
+    use reconbench_geom::Channel;
+    if output.is_empty() || input.is_empty() {
+        return Ok(BTreeMap::new());
+    }
+    let mut lines = Vec::new();
+    if let Some(Channel::Label(flag)) = output.channel(LINE_FLAG_CHANNEL) {
+        let ch: Vec<&Channel> = LINE_CHANNELS
+            .iter()
+            .filter_map(|n| output.channel(n))
+            .collect();
+        if ch.len() == 12 {
+            for (i, _) in flag.iter().enumerate().filter(|(_, f)| **f != 0) {
+                let c = |j: usize| {
+                    reconbench_geom::DVec3::new(
+                        ch[3 * j].get_f64(i),
+                        ch[3 * j + 1].get_f64(i),
+                        ch[3 * j + 2].get_f64(i),
+                    )
+                };
+                lines.push([c(0), c(1), c(2), c(3)]);
+            }
+        }
+    }
+    let opts = reconbench_metrics::FilterEvalOptions {
+        feature_angle_deg,
+        ..Default::default()
+    };
+    let curves = reference.map(|r| r.feature_curves(feature_angle_deg));
+    let truth = shape.zip(curves.as_deref());
+    let ev = reconbench_metrics::eval_filter(
+        output.positions(),
+        output.normals(),
+        input,
+        truth,
+        &lines,
+        diag,
+        &opts,
+    )
+    .map_err(|e| format!("metrics: {e}"))?;
+    Ok(keep_metrics(ev.to_row()))
 }
 
 /// Metrics of a filter's output cloud: distances of its non-outlier points to the

@@ -6,6 +6,8 @@
 //! * [`normals`]: unoriented / oriented angle statistics, PGP5 / PGP10, flip rate.
 //! * [`features`]: sharp-feature precision / recall / F1, distance to the curves, curve
 //!   coverage, mesh feature recovery.
+//! * [`filter_eval`]: projecting filters (MLS): distance to the input and to the surface,
+//!   normal error near and away from features, feature-line error (seed 002 Tables 3-6).
 //! * [`topology`]: geom's topology analysis plus Delta F, `topology_ok` and
 //!   self-intersections.
 //! * [`quality`]: triangle angles, aspect ratios, edge lengths.
@@ -22,6 +24,7 @@ pub mod distance;
 pub mod error;
 pub mod eval;
 pub mod features;
+pub mod filter_eval;
 pub mod normals;
 pub mod quality;
 pub mod reference;
@@ -40,6 +43,7 @@ pub use eval::{MeshEval, MeshEvalOptions, eval_cloud_features, eval_mesh};
 pub use features::{
     CleanPositions, FeatureEval, FeatureOptions, MeshFeatureEval, eval_features, eval_mesh_features,
 };
+pub use filter_eval::{FilterEval, FilterEvalOptions, eval_filter};
 pub use normals::{NormalEval, NormalGroundTruth, NormalOptions, eval_cloud_normals, eval_normals};
 pub use quality::{QualityEval, QualityOptions, eval_quality};
 pub use reference::{Reference, SurfaceHit};
