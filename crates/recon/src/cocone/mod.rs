@@ -69,6 +69,9 @@ pub struct TightCoconeParams {
     /// Relabel the smallest groups of tetrahedra at non-manifold edges and pinched
     /// vertices of the interface (rounds; 0 = the paper's output as it is).
     pub repair_rounds: usize,
+    /// Relabel inside blobs and enclosed outside cavities with fewer tetrahedra than this
+    /// share of the inside ones (0 = keep every pocket, the paper's output).
+    pub pocket_share: f64,
 }
 
 impl Default for TightCoconeParams {
@@ -79,6 +82,7 @@ impl Default for TightCoconeParams {
             prune_dangling: false,
             surface: SurfaceRule::OneGood,
             repair_rounds: 8,
+            pocket_share: 0.01,
         }
     }
 }
@@ -164,10 +168,21 @@ impl Describe for TightCocone {
             Unit::Count,
             "rounds relabelling the smallest tetrahedron group at non-manifold spots (0 = literal)",
         ),
+        ParamDoc::new(
+            "pocket_share",
+            Unit::Fraction,
+            "relabel inside blobs / enclosed cavities below this share of the inside tetrahedra (0 = literal)",
+        ),
     ];
 
     fn from_params(params: TightCoconeParams) -> Result<Self, MethodError> {
         check_angles(params.theta_deg, params.sharp_deg)?;
+        if !(params.pocket_share.is_finite() && (0.0..1.0).contains(&params.pocket_share)) {
+            return Err(MethodError::InvalidParameter {
+                name: "pocket_share".into(),
+                message: format!("must be in [0, 1), got {}", params.pocket_share),
+            });
+        }
         Ok(Self { params })
     }
 }
@@ -363,9 +378,12 @@ impl Reconstructor for TightCocone {
         let mut inside = tight::label(&dt, &poles, &surface, &good, &mut stats);
         drop(g);
         // ASSUMPTION K-07 (deviation): the interface is made manifold by relabelling.
-        let rep = ctx.phase("repair", || {
-            repair::repair(&dt, &mut inside, p.repair_rounds)
+        let (rep, pockets) = ctx.phase("repair", || {
+            // ASSUMPTION K-08 (deviation): small pockets are relabelled first.
+            let pockets = repair::drop_pockets(&dt, &mut inside, p.pocket_share);
+            (repair::repair(&dt, &mut inside, p.repair_rounds), pockets)
         });
+        num(&mut d, "pocket_tets", pockets as f64);
         let tris = tight::interface(&dt, &inside);
         num(&mut d, "repair_rounds", rep.rounds as f64);
         num(&mut d, "repair_flipped_tets", rep.flipped as f64);
@@ -381,8 +399,8 @@ impl Reconstructor for TightCocone {
         d.insert(
             "assumptions".into(),
             Diagnostic::Text(format!(
-                "K-01=farthest-voronoi-vertex,hull:mean-normal K-02=dangling-sharp:{} K-03=hull-seed K-04=exact-segment-cone K-05=surface:{:?} K-06=certain-first,ball-angle K-07=repair:{}",
-                p.prune_dangling, p.surface, p.repair_rounds
+                "K-01=farthest-voronoi-vertex,hull:mean-normal K-02=dangling-sharp:{} K-03=hull-seed K-04=exact-segment-cone K-05=surface:{:?} K-06=certain-first,ball-angle K-07=repair:{} K-08=pockets:{}",
+                p.prune_dangling, p.surface, p.repair_rounds, p.pocket_share
             )),
         );
         finish(cloud, &dt, &tris, d, ctx)

@@ -205,3 +205,47 @@ pub fn defects(nv: usize, tris: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
         .collect();
     (bad_edges, bad_vertices)
 }
+
+/// Relabels every face-connected region of one label with fewer than `share` times the
+/// inside tetrahedra: small inside blobs become outside, small enclosed outside cavities
+/// inside (the region holding the ghosts is never touched). Returns the tetrahedra
+/// relabelled.
+pub fn drop_pockets(dt: &Delaunay, inside: &mut [bool], share: f64) -> usize {
+    let nt = dt.n_tets();
+    let total_in = inside[..nt].iter().filter(|&&x| x).count();
+    let limit = (share * total_in as f64).floor() as usize;
+    if limit == 0 {
+        return 0;
+    }
+    let mut seen = vec![false; dt.n_all_tets()];
+    let mut stack = Vec::new();
+    let mut members = Vec::new();
+    let mut flipped = 0;
+    for s in 0..dt.n_all_tets() {
+        if seen[s] {
+            continue;
+        }
+        let lab = inside[s];
+        seen[s] = true;
+        stack.push(s as u32);
+        members.clear();
+        let mut has_ghost = false;
+        while let Some(t) = stack.pop() {
+            members.push(t);
+            has_ghost |= t as usize >= nt;
+            for n in dt.tet_neighbors(t) {
+                if !seen[n as usize] && inside[n as usize] == lab {
+                    seen[n as usize] = true;
+                    stack.push(n);
+                }
+            }
+        }
+        if !has_ghost && members.len() < limit {
+            for &t in &members {
+                inside[t as usize] = !lab;
+            }
+            flipped += members.len();
+        }
+    }
+    flipped
+}
