@@ -42,6 +42,9 @@ pub struct GrowOpts {
     pub ear_filling: bool,
     /// Largest gap angle an ear may close (radians; E19: 90 degrees).
     pub ear_angle: f64,
+    /// Retry deferred points as soon as a point within Omega joins (else only in the
+    /// next pass, G4 literally).
+    pub wake_deferred: bool,
     /// Seed as an index into the points; `None` = ASSUMPTION E11.
     pub seed: Option<u32>,
 }
@@ -59,7 +62,7 @@ pub struct Grown {
     pub passes: usize,
     /// Ears closed (E19).
     pub ears: usize,
-    /// Insertion attempts that deferred the point (E18).
+    /// Points still deferred at the end of each pass, summed (E18).
     pub deferrals: usize,
 }
 
@@ -501,6 +504,14 @@ pub fn grow(
         .filter(|&i| fr.state[i as usize] == FREE)
         .collect();
     let (mut passes, mut deferrals, mut tries) = (0usize, 0usize, 0usize);
+    // Rank of each point in the distance order (woken points are retried in it).
+    let mut rank = vec![0u32; n];
+    for (r, &i) in order.iter().enumerate() {
+        rank[i as usize] = r as u32;
+    }
+    let mut waiting = vec![false; n];
+    let mut stack: Vec<u32> = Vec::new();
+    let mut woken: Vec<u32> = Vec::new();
     loop {
         passes += 1;
         let mut deferred = Vec::new();
@@ -515,14 +526,43 @@ pub fn grow(
             }
             if fr.insert(qi, opts.ear_filling) {
                 added += 1;
+                if opts.wake_deferred {
+                    // Retry the deferred points within Omega of each point that joins,
+                    // nearest-to-the-seed first, and so on from the ones that join.
+                    stack.push(qi);
+                    while let Some(x) = stack.pop() {
+                        woken.clear();
+                        let px = p[x as usize];
+                        let (st, wt) = (&fr.state, &waiting);
+                        fr.grid.for_each_near(px, opts.omega, |j| {
+                            if wt[j as usize]
+                                && st[j as usize] == FREE
+                                && (p[j as usize] - px).length() <= opts.omega
+                            {
+                                woken.push(j);
+                            }
+                        });
+                        woken.sort_unstable_by_key(|&j| rank[j as usize]);
+                        for &j in &woken {
+                            tries += 1;
+                            if fr.state[j as usize] == FREE && fr.insert(j, opts.ear_filling) {
+                                waiting[j as usize] = false;
+                                added += 1;
+                                stack.push(j);
+                            }
+                        }
+                    }
+                }
             } else {
                 // ASSUMPTION E18: an unlinkable point is deferred and retried.
+                waiting[qi as usize] = true;
                 deferred.push(qi);
             }
         }
         if opts.ear_filling {
             added += fr.sweep_ears();
         }
+        deferred.retain(|&i| fr.state[i as usize] == FREE);
         deferrals += deferred.len();
         if added == 0 || deferred.is_empty() {
             break;

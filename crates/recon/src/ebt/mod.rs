@@ -243,6 +243,7 @@ impl Reconstructor for Ebt {
             min_angle: theta,
             ear_filling: p.ear_filling,
             ear_angle: p.ear_angle_deg.to_radians(),
+            wake_deferred: p.wake_deferred,
             seed,
         };
         let grown = {

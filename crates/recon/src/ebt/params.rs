@@ -244,6 +244,9 @@ pub struct EbtParams {
     pub ear_filling: bool,
     /// Largest gap angle (degrees) an ear may close; E19 says 90.
     pub ear_angle_deg: f64,
+    /// Retry deferred points as soon as a point within Omega joins (E18 refinement);
+    /// false = only in the next pass (G4 as written).
+    pub wake_deferred: bool,
     /// ASSUMPTION E21: feature-alignment swaps (ABN cost), then lock feature edges.
     pub feature_align: bool,
     /// Dihedral above which an edge counts as a feature edge (E21), degrees.
@@ -273,6 +276,7 @@ impl Default for EbtParams {
             seed_point: -1,
             ear_filling: true,
             ear_angle_deg: 90.0,
+            wake_deferred: true,
             feature_align: false,
             feature_angle_deg: 30.0,
             equilateral: false,
@@ -313,6 +317,11 @@ pub const EBT_DOCS: &[ParamDoc] = &[
         "ear_angle_deg",
         Unit::Deg,
         "largest gap angle an ear may close (ASSUMPTION E19: 90)",
+    ),
+    ParamDoc::new(
+        "wake_deferred",
+        Unit::Flag,
+        "retry a deferred point when a point within Omega joins (E18); off = next pass only (G4)",
     ),
     ParamDoc::new(
         "feature_align",
