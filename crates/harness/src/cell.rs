@@ -165,7 +165,7 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
                 reference.as_ref(),
                 diag,
                 opts.features.feature_angle_deg,
-            )?);
+            ));
             out.dist = Dist::of("point distance (diag)", &d);
             out.metrics_s = t.elapsed().as_secs_f64();
         }
@@ -327,11 +327,11 @@ fn projection_metrics(
     reference: Option<&Reference>,
     diag: f64,
     feature_angle_deg: f64,
-) -> std::result::Result<BTreeMap<String, f64>, String> {
+) -> BTreeMap<String, f64> {
     use reconbench_filters::mls_sharp::{LINE_CHANNELS, LINE_FLAG_CHANNEL};
     use reconbench_geom::Channel;
     if output.is_empty() || input.is_empty() {
-        return Ok(BTreeMap::new());
+        return BTreeMap::new();
     }
     let mut lines = Vec::new();
     if let Some(Channel::Label(flag)) = output.channel(LINE_FLAG_CHANNEL) {
@@ -358,7 +358,9 @@ fn projection_metrics(
     };
     let curves = reference.map(|r| r.feature_curves(feature_angle_deg));
     let truth = shape.zip(curves.as_deref());
-    let ev = reconbench_metrics::eval_filter(
+    // A cloud these metrics cannot measure (fewer than two distinct points) leaves them
+    // out rather than failing the cell, as the filter itself succeeded.
+    match reconbench_metrics::eval_filter(
         output.positions(),
         output.normals(),
         input,
@@ -366,9 +368,10 @@ fn projection_metrics(
         &lines,
         diag,
         &opts,
-    )
-    .map_err(|e| format!("metrics: {e}"))?;
-    Ok(keep_metrics(ev.to_row()))
+    ) {
+        Ok(ev) => keep_metrics(ev.to_row()),
+        Err(_) => BTreeMap::new(),
+    }
 }
 
 /// Metrics of a filter's output cloud: distances of its non-outlier points to the
