@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use reconbench_geom::method::{Diagnostic, Diagnostics, FeatureClass, RunCtx};
+use reconbench_geom::method::{
+    Diagnostic, Diagnostics, FeatureClass, INTERPOLATING_DIAGNOSTIC, RunCtx,
+};
 use reconbench_metrics::{Reference, Report, eval_features, eval_mesh, eval_normals};
 use reconbench_synth::Shape;
 use serde_json::Value;
@@ -71,6 +73,29 @@ pub const DIAGNOSTIC_METRICS: &[&str] = &[
     "unmatched_points",
     "pinched_vertices",
 ];
+
+/// Metrics that count input points as mesh vertices (the seed's V is the number of
+/// input points): meaningless for a mesh with new vertices (Poisson's), so left out of
+/// its rows.
+pub const VERTEX_CLAIMS: &[&str] = &[
+    "vertices",
+    "referenced_vertices",
+    "unreferenced_vertices",
+    "delta_f",
+];
+
+/// Whether a reconstruction interpolates its input: true unless the method set the
+/// [`INTERPOLATING_DIAGNOSTIC`] to 0.
+fn interpolating(d: &Diagnostics) -> bool {
+    !matches!(d.get(INTERPOLATING_DIAGNOSTIC), Some(Diagnostic::Number(x)) if *x == 0.0)
+}
+
+/// Removes the [`VERTEX_CLAIMS`] from a row.
+fn drop_vertex_claims(metrics: &mut BTreeMap<String, f64>) {
+    for k in VERTEX_CLAIMS {
+        metrics.remove(*k);
+    }
+}
 
 /// Keeps deterministic numeric entries (timings of the evaluation itself are cost, not
 /// metrics, and are left out so that rows compare byte for byte).
@@ -244,6 +269,9 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             o.distance.vertex_error = true;
             let Some(reference) = &reference else {
                 out.metrics = keep_metrics(without_ground_truth(&r.mesh, &o));
+                if !interpolating(&r.diagnostics) {
+                    drop_vertex_claims(&mut out.metrics);
+                }
                 out.metrics_s = t.elapsed().as_secs_f64();
                 out.diagnostics = diagnostics_json(&r.diagnostics);
                 out.phases = ctx.phases();
@@ -251,10 +279,14 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             };
             let ev = eval_mesh(&r.mesh, reference, &o).map_err(|e| format!("metrics: {e}"))?;
             out.metrics = keep_metrics(ev.to_row());
-            // Refused points against the generator's outliers (seed 001 §4.4).
-            let re = reconbench_metrics::eval_refused(&r.refused, &data.is_outlier)
-                .map_err(|e| format!("metrics: {e}"))?;
-            out.metrics.extend(keep_metrics(re.to_row()));
+            if interpolating(&r.diagnostics) {
+                // Refused points against the generator's outliers (seed 001 §4.4).
+                let re = reconbench_metrics::eval_refused(&r.refused, &data.is_outlier)
+                    .map_err(|e| format!("metrics: {e}"))?;
+                out.metrics.extend(keep_metrics(re.to_row()));
+            } else {
+                drop_vertex_claims(&mut out.metrics);
+            }
             for k in DIAGNOSTIC_METRICS {
                 if let Some(reconbench_geom::method::Diagnostic::Number(x)) = r.diagnostics.get(*k)
                     && x.is_finite()
@@ -407,4 +439,25 @@ fn filter_metrics(
         );
     }
     keep_metrics(m)
+}
+
+#[cfg(test)]
+mod interpolating_tests {
+    use super::*;
+
+    #[test]
+    fn a_non_interpolating_mesh_claims_no_vertex_counts_or_delta_f() {
+        let mut d = Diagnostics::new();
+        assert!(interpolating(&d));
+        d.insert(INTERPOLATING_DIAGNOSTIC.into(), Diagnostic::Number(1.0));
+        assert!(interpolating(&d));
+        d.insert(INTERPOLATING_DIAGNOSTIC.into(), Diagnostic::Number(0.0));
+        assert!(!interpolating(&d));
+        let mut row: BTreeMap<String, f64> = ["vertices", "delta_f", "faces", "genus"]
+            .iter()
+            .map(|k| (k.to_string(), 1.0))
+            .collect();
+        drop_vertex_claims(&mut row);
+        assert_eq!(row.keys().collect::<Vec<_>>(), ["faces", "genus"]);
+    }
 }

@@ -8,13 +8,22 @@
 //!   watertight manifold Delaunay reconstruction, and `ufm-mesh`, its local-mesh
 //!   normal estimator (ch. 4, Algorithm B).
 //!
+//! * [`ball_pivoting`] — `ball-pivoting`, the Ball-Pivoting Algorithm (Bernardini et
+//!   al. 1999), the interpolating baseline of seed 001.
+//! * [`poisson`] — `poisson`, Poisson surface reconstruction (Kazhdan, Bolitho & Hoppe
+//!   2006) through the `threecrate-reconstruction` crate; approximating.
+//!
 //! Every method implements [`reconbench_geom::method::Reconstructor`] and has a serde
 //! `Params` struct with documented defaults.
 
+pub mod ball_pivoting;
 pub mod ebt;
+pub mod poisson;
 pub mod priority_front;
 pub mod ufm;
 
+pub use ball_pivoting::{BallPivoting, BallPivotingParams};
 pub use ebt::{Ebt, EbtParams};
+pub use poisson::{Poisson, PoissonParams};
 pub use priority_front::{PriorityFront, PriorityFrontParams};
 pub use ufm::{Ufm, UfmMesh, UfmMeshParams, UfmParams};

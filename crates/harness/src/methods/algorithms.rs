@@ -8,6 +8,7 @@ use reconbench_filters::{EbtThinning, GridThinning, RandomThinning};
 use reconbench_filters::{Mls, MlsSharp};
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
 use reconbench_recon::Ebt;
+use reconbench_recon::{BallPivoting, Poisson};
 use reconbench_recon::{PriorityFront, Ufm, UfmMesh};
 
 use crate::entry::{MethodEntry, features, filter, normals, reconstruct};
@@ -32,5 +33,7 @@ pub fn entries() -> Vec<MethodEntry> {
         reconstruct::<PriorityFront>(),
         reconstruct::<Ebt>(),
         reconstruct::<Ufm>(),
+        reconstruct::<BallPivoting>(),
+        reconstruct::<Poisson>(),
     ]
 }

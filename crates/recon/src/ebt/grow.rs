@@ -28,6 +28,9 @@ const INTERIOR: u8 = 2;
 /// T-junction tolerance, relative to Omega (spec §3.5 G3e).
 const TJ_REL: f64 = 1e-3;
 
+/// Seed candidates tried (nearest the centroid first) when no first triangle forms.
+const SEED_TRIES: usize = 64;
+
 /// Insertions between two calls of the cancellation check.
 const CHECK_EVERY: usize = 2048;
 
@@ -64,13 +67,6 @@ pub struct Grown {
     pub ears: usize,
     /// Points still deferred at the end of each pass, summed (E18).
     pub deferrals: usize,
-}
-
-/// The seed of ASSUMPTION E11: the point nearest the centroid.
-pub fn default_seed(points: &[DVec3]) -> u32 {
-    // ASSUMPTION E11: without a user seed, the point of Q nearest Q's centroid.
-    let c = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
-    default_seed_near(points, c)
 }
 
 /// The point of `points` nearest `x` (ties to the lower index): a user seed that
@@ -434,32 +430,53 @@ pub fn grow(
             "the thinned set has {n} points; a mesh needs at least 3 (epsilon or bin_size too large?)"
         )));
     }
-    let s = match opts.seed {
-        Some(s) if (s as usize) < n => s,
+    // Seed candidates: the user's seed, or (ASSUMPTION E11) the points by distance from
+    // the centroid of Q; the next candidate is tried when no first triangle forms (an
+    // isolated point nearest the centroid).
+    let candidates: Vec<u32> = match opts.seed {
+        Some(s) if (s as usize) < n => vec![s],
         Some(s) => {
             return Err(MethodError::InvalidParameter {
                 name: "seed_point".into(),
                 message: format!("index {s} is outside the {n} points"),
             });
         }
-        None => default_seed(p),
+        None => {
+            let c = p.iter().copied().sum::<DVec3>() / n as f64;
+            let mut all: Vec<u32> = (0..n as u32).collect();
+            all.sort_by(|&a, &b| {
+                (p[a as usize] - c)
+                    .length_squared()
+                    .total_cmp(&(p[b as usize] - c).length_squared())
+                    .then(a.cmp(&b))
+            });
+            all.truncate(SEED_TRIES);
+            all
+        }
     };
-    // G1: the other points by ascending distance from the seed, ties by index.
-    let ps = p[s as usize];
-    let mut order: Vec<u32> = (0..n as u32).filter(|&i| i != s).collect();
-    order.sort_by(|&a, &b| {
-        (p[a as usize] - ps)
-            .length_squared()
-            .total_cmp(&(p[b as usize] - ps).length_squared())
-            .then(a.cmp(&b))
-    });
     // The global PCA normal of the single patch orients the first triangle.
     let up = sym_eigen3(covariance(p, None)?.matrix)?.vectors[0];
-    let Some(t0) = first_triangle(p, s, &order, opts, up) else {
+    let mut found = None;
+    for &s in &candidates {
+        // G1: the other points by ascending distance from the seed, ties by index.
+        let ps = p[s as usize];
+        let mut order: Vec<u32> = (0..n as u32).filter(|&i| i != s).collect();
+        order.sort_by(|&a, &b| {
+            (p[a as usize] - ps)
+                .length_squared()
+                .total_cmp(&(p[b as usize] - ps).length_squared())
+                .then(a.cmp(&b))
+        });
+        if let Some(t0) = first_triangle(p, s, &order, opts, up) {
+            found = Some((s, order, t0));
+            break;
+        }
+    }
+    let Some((s, order, t0)) = found else {
         return Err(MethodError::Failed(format!(
-            "no first triangle at the seed (point {s}): no two points within Omega = {:.4e} \
+            "no first triangle at the seed (point {}): no two points within Omega = {:.4e} \
              form a triangle with all angles above the minimum",
-            opts.omega
+            candidates[0], opts.omega
         )));
     };
     let ids: Vec<u32> = (0..n as u32).collect();
