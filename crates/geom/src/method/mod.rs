@@ -158,3 +158,9 @@ pub trait Filter: Send + Sync + std::fmt::Debug {
 /// Name of the point channel in which a pipeline attaches feature labels
 /// ([`FeatureClass`] as integers) for later steps.
 pub const FEATURE_CHANNEL: &str = "feature";
+
+/// Name of the [`Diagnostic::Number`] a reconstructor sets to 0 when its mesh does not
+/// interpolate the input (new vertices, as Poisson's): the evaluator then reports no
+/// vertex counts, Delta F or refused-point metrics for it, which count input points as
+/// vertices.
+pub const INTERPOLATING_DIAGNOSTIC: &str = "interpolating";

@@ -1,0 +1,480 @@
+//! The ball-pivoting state and its three operations (Bernardini et al. 1999, §3-4):
+//! seed triangle search, pivoting a front edge (with join / glue of the new triangle's
+//! edges), and re-activating boundary edges for the next, larger radius.
+//!
+//! Every vertex is a distinct input point. An edge is stored once (undirected key) with
+//! the direction it has in its first triangle; it is *front* while it has one triangle
+//! and may still be pivoted, *boundary* when the pivot failed at the current radius, and
+//! *inner* with two triangles. The front is a FIFO queue of edge ids, so a run is a pure
+//! function of the input order.
+
+use std::collections::{HashMap, VecDeque};
+
+use glam::DVec3;
+use reconbench_geom::spatial::RadiusTable;
+
+use super::geometry::{PivotFrame, ball_centre, ball_centres};
+
+type FastMap = HashMap<u64, u32, foldhash::fast::FixedState>;
+
+/// Edge status.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum EdgeState {
+    /// One triangle; queued for pivoting.
+    Front,
+    /// One triangle; the pivot failed at the current radius.
+    Boundary,
+    /// Two triangles.
+    Inner,
+}
+
+/// One mesh edge.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Edge {
+    /// Direction in its first triangle (counter-clockwise about the outward normal).
+    pub from: u32,
+    /// See `from`.
+    pub to: u32,
+    /// Third vertex of its first triangle.
+    pub opp: u32,
+    /// Centre of the ball resting on its first triangle (for the radius it has).
+    pub centre: DVec3,
+    /// Status.
+    pub state: EdgeState,
+}
+
+/// Why a pivot produced no triangle (counted in the diagnostics).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Counts {
+    /// Pivots that touched no point.
+    pub no_hit: usize,
+    /// Pivots whose hit point was an inner vertex.
+    pub inner_hit: usize,
+    /// Pivots whose triangle would make a non-manifold or misoriented edge.
+    pub edge_conflict: usize,
+    /// Pivots whose triangle disagrees with the point normals.
+    pub normal_conflict: usize,
+    /// Triangles created by glueing at least one existing front edge.
+    pub glued: usize,
+    /// Seed triangles.
+    pub seeds: usize,
+    /// Boundary edges re-activated for a larger radius.
+    pub reactivated: usize,
+}
+
+/// The mesher.
+#[derive(Debug)]
+pub(crate) struct Mesher<'a> {
+    pos: &'a [DVec3],
+    nrm: &'a [DVec3],
+    /// Neighbours of each point within `2 * max radius`, sorted by distance (self first).
+    nbrs: &'a RadiusTable,
+    /// Whether a point has been used by a triangle.
+    used: Vec<bool>,
+    /// Per vertex: incident edges with exactly one triangle.
+    open: Vec<u32>,
+    edges: Vec<Edge>,
+    map: FastMap,
+    queue: VecDeque<u32>,
+    /// Output triangles (counter-clockwise about the outward normal).
+    pub tris: Vec<[u32; 3]>,
+    /// Diagnostics counts.
+    pub counts: Counts,
+    rho: f64,
+    /// Reused buffer of (angle, candidate, hit from below, centre).
+    cand: Vec<(f64, u32, bool, DVec3)>,
+}
+
+#[inline]
+fn key(a: u32, b: u32) -> u64 {
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    (u64::from(lo) << 32) | u64::from(hi)
+}
+
+/// Tolerance of the emptiness test: a point counts as inside the ball when it is closer
+/// to the centre than `rho * (1 - EMPTY_TOL)`.
+const EMPTY_TOL: f64 = 1e-9;
+
+impl<'a> Mesher<'a> {
+    /// A mesher over `pos` with unit normals `nrm` (zero: unusable point) and the
+    /// neighbour table `nbrs`.
+    pub fn new(pos: &'a [DVec3], nrm: &'a [DVec3], nbrs: &'a RadiusTable) -> Self {
+        let n = pos.len();
+        let mut map = FastMap::default();
+        map.reserve(3 * n);
+        Self {
+            pos,
+            nrm,
+            nbrs,
+            used: vec![false; n],
+            open: vec![0; n],
+            edges: Vec::with_capacity(3 * n),
+            map,
+            queue: VecDeque::new(),
+            tris: Vec::with_capacity(2 * n),
+            counts: Counts::default(),
+            rho: 0.0,
+            cand: Vec::new(),
+        }
+    }
+
+    /// Sets the ball radius of the next operations.
+    pub fn set_radius(&mut self, rho: f64) {
+        self.rho = rho;
+    }
+
+    /// Neighbours of `i` within `2 * rho` (a prefix of its sorted row).
+    #[inline]
+    fn near(&self, i: u32) -> &'a [u32] {
+        let lim = 4.0 * self.rho * self.rho;
+        let d2 = self.nbrs.dist2(i as usize);
+        let k = d2.partition_point(|&d| d <= lim);
+        &self.nbrs.indices(i as usize)[..k]
+    }
+
+    /// Whether no point near `i` lies strictly inside the ball at `c` (the points in
+    /// `skip` excepted).
+    #[inline]
+    fn empty(&self, i: u32, c: DVec3, skip: [u32; 3]) -> bool {
+        let lim = self.rho * self.rho * (1.0 - EMPTY_TOL);
+        self.near(i)
+            .iter()
+            .all(|&q| skip.contains(&q) || self.pos[q as usize].distance_squared(c) >= lim)
+    }
+
+    /// Whether triangle `t`'s normal agrees with its vertices' normals (positive dot
+    /// products), as Bernardini's consistency test.
+    #[inline]
+    fn compatible(&self, t: [u32; 3]) -> bool {
+        let [a, b, c] = t.map(|v| self.pos[v as usize]);
+        let n = (b - a).cross(c - a);
+        t.iter().all(|&v| n.dot(self.nrm[v as usize]) > 0.0)
+    }
+
+    /// Whether `v` may receive a new triangle (unused, or on the front).
+    #[inline]
+    fn usable(&self, v: u32) -> bool {
+        !self.used[v as usize] || self.open[v as usize] > 0
+    }
+
+    /// Whether the directed edge `a -> b` can be added to a new triangle: absent, or
+    /// present once in the opposite direction (then the triangle glues onto it).
+    #[inline]
+    fn edge_ok(&self, a: u32, b: u32) -> Option<bool> {
+        match self.map.get(&key(a, b)) {
+            None => Some(false),
+            Some(&e) => {
+                let e = &self.edges[e as usize];
+                (e.state != EdgeState::Inner && e.from == b && e.to == a).then_some(true)
+            }
+        }
+    }
+
+    /// Adds triangle `(a, b, c)` whose ball centre is `centre`: edges already present
+    /// (in the opposite direction) become inner, the others join the front.
+    fn add_triangle(&mut self, t: [u32; 3], centre: DVec3) {
+        self.tris.push(t);
+        let mut glued = false;
+        for k in 0..3 {
+            let (a, b, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            self.used[a as usize] = true;
+            match self.map.get(&key(a, b)) {
+                Some(&e) => {
+                    self.edges[e as usize].state = EdgeState::Inner;
+                    self.open[a as usize] -= 1;
+                    self.open[b as usize] -= 1;
+                    glued = true;
+                }
+                None => {
+                    let id = self.edges.len() as u32;
+                    self.edges.push(Edge {
+                        from: a,
+                        to: b,
+                        opp: o,
+                        centre,
+                        state: EdgeState::Front,
+                    });
+                    self.map.insert(key(a, b), id);
+                    self.open[a as usize] += 1;
+                    self.open[b as usize] += 1;
+                    self.queue.push_back(id);
+                }
+            }
+        }
+        if glued {
+            self.counts.glued += 1;
+        }
+    }
+
+    /// Pivots every queued front edge until the queue is empty; returns the number of
+    /// triangles added. `poll` is called every 4096 pivots and stops the loop when it
+    /// returns false.
+    pub fn expand(&mut self, poll: &mut dyn FnMut(usize) -> bool) -> usize {
+        let before = self.tris.len();
+        let mut pivots = 0usize;
+        while let Some(e) = self.queue.pop_front() {
+            pivots += 1;
+            if pivots.is_multiple_of(4096) && !poll(self.tris.len()) {
+                break;
+            }
+            let edge = self.edges[e as usize];
+            if edge.state != EdgeState::Front {
+                continue;
+            }
+            match self.pivot(&edge) {
+                Some((k, c)) => self.add_triangle([edge.to, edge.from, k], c),
+                None => self.edges[e as usize].state = EdgeState::Boundary,
+            }
+        }
+        self.tris.len() - before
+    }
+
+    /// Pivots the ball about front edge `a -> b` of triangle `(a, b, o)`: the first point
+    /// the sphere touches gives the triangle `(b, a, k)` if it is valid.
+    fn pivot(&mut self, e: &Edge) -> Option<(u32, DVec3)> {
+        let (a, b, o) = (e.from, e.to, e.opp);
+        let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
+        let frame = PivotFrame::new(pa, pb, e.centre)?;
+        let w = {
+            let po = self.pos[o as usize] - frame.m;
+            let u = (pb - pa).normalize();
+            po - u * po.dot(u)
+        };
+        let lim = 4.0 * self.rho * self.rho;
+        let mut cand = std::mem::take(&mut self.cand);
+        cand.clear();
+        for &k in self.near(a) {
+            if k == a || k == b || k == o {
+                continue;
+            }
+            let pk = self.pos[k as usize];
+            if pk.distance_squared(pb) > lim {
+                continue;
+            }
+            // The sphere touches k at two positions of the pivot circle; the first one
+            // reached is where it enters the ball.
+            let Some((up, down)) = ball_centres(pb, pa, pk, self.rho) else {
+                continue;
+            };
+            let (tu, td) = (frame.angle(up), frame.angle(down));
+            let (t, below, c) = if tu <= td {
+                (tu, false, up)
+            } else {
+                (td, true, down)
+            };
+            // A point co-spherical with the current ball on o's side would fold the
+            // new triangle back over the old one.
+            if t < 1e-9 && (pk - frame.m).dot(w) > 0.0 {
+                continue;
+            }
+            // A hit from below (entering through the wrong side) is kept as a hit: it
+            // stops the ball, and the triangle test below rejects it.
+            cand.push((t, k, below, c));
+        }
+        cand.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+        let mut out = None;
+        let mut hit = false;
+        for &(_, k, below, c) in &cand {
+            // Numerical safety: the first hit's ball must be empty; otherwise try the next.
+            if !self.empty(a, c, [a, b, k]) {
+                continue;
+            }
+            hit = true;
+            if below {
+                self.counts.normal_conflict += 1;
+                break;
+            }
+            if !self.usable(k) {
+                self.counts.inner_hit += 1;
+                break;
+            }
+            let t = [b, a, k];
+            if !self.compatible(t) {
+                self.counts.normal_conflict += 1;
+                break;
+            }
+            if self.edge_ok(a, k).is_none() || self.edge_ok(k, b).is_none() {
+                self.counts.edge_conflict += 1;
+                break;
+            }
+            out = Some((k, c));
+            break;
+        }
+        if !hit {
+            self.counts.no_hit += 1;
+        }
+        self.cand = cand;
+        out
+    }
+
+    /// Looks for a seed triangle among unused points, starting at `*cursor` (advanced
+    /// past every point tried). Adds it and returns true when one is found.
+    pub fn find_seed(&mut self, cursor: &mut usize) -> bool {
+        let n = self.pos.len();
+        while *cursor < n {
+            let s = *cursor as u32;
+            *cursor += 1;
+            if self.used[s as usize] || self.nrm[s as usize] == DVec3::ZERO {
+                continue;
+            }
+            if let Some((t, c)) = self.seed_at(s) {
+                self.counts.seeds += 1;
+                self.add_triangle(t, c);
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The first valid seed triangle at `s`: pairs of unused neighbours in distance
+    /// order, oriented by `s`'s normal, consistent with all three normals, whose
+    /// ρ-ball on the normal side is empty.
+    fn seed_at(&self, s: u32) -> Option<([u32; 3], DVec3)> {
+        let near = self.near(s);
+        let ps = self.pos[s as usize];
+        let lim = 4.0 * self.rho * self.rho;
+        let free = |v: u32| v != s && !self.used[v as usize] && self.nrm[v as usize] != DVec3::ZERO;
+        for (i, &a) in near.iter().enumerate() {
+            if !free(a) {
+                continue;
+            }
+            for &b in &near[i + 1..] {
+                if !free(b) {
+                    continue;
+                }
+                let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
+                if pa.distance_squared(pb) > lim {
+                    continue;
+                }
+                let n = (pa - ps).cross(pb - ps);
+                let t = if n.dot(self.nrm[s as usize]) >= 0.0 {
+                    [s, a, b]
+                } else {
+                    [s, b, a]
+                };
+                if !self.compatible(t) {
+                    continue;
+                }
+                let [p0, p1, p2] = t.map(|v| self.pos[v as usize]);
+                let Some(c) = ball_centre(p0, p1, p2, self.rho) else {
+                    continue;
+                };
+                if self.empty(s, c, t) {
+                    return Some((t, c));
+                }
+            }
+        }
+        None
+    }
+
+    /// Re-activates every boundary edge whose triangle's ball of the current radius is
+    /// empty (Bernardini §4.3, multiple passes); returns how many.
+    pub fn reactivate(&mut self) -> usize {
+        let mut n = 0;
+        for e in 0..self.edges.len() {
+            let edge = self.edges[e];
+            if edge.state != EdgeState::Boundary {
+                continue;
+            }
+            let t = [edge.from, edge.to, edge.opp];
+            let [p0, p1, p2] = t.map(|v| self.pos[v as usize]);
+            let Some(c) = ball_centre(p0, p1, p2, self.rho) else {
+                continue;
+            };
+            if self.empty(edge.from, c, t) {
+                let ed = &mut self.edges[e];
+                ed.centre = c;
+                ed.state = EdgeState::Front;
+                self.queue.push_back(e as u32);
+                n += 1;
+            }
+        }
+        self.counts.reactivated += n;
+        n
+    }
+
+    /// Directed boundary edges (one triangle) of the mesh, in edge order.
+    pub fn boundary_edges(&self) -> Vec<(u32, u32)> {
+        self.edges
+            .iter()
+            .filter(|e| e.state != EdgeState::Inner)
+            .map(|e| (e.from, e.to))
+            .collect()
+    }
+
+    /// Whether point `i` is used by a triangle.
+    pub fn is_used(&self, i: usize) -> bool {
+        self.used[i]
+    }
+}
+
+/// Number of closed loops the directed boundary edges form (each edge in one loop;
+/// at a vertex with several outgoing edges the lowest unused one is taken).
+pub(crate) fn count_loops(n: usize, edges: &[(u32, u32)]) -> usize {
+    let mut start = vec![0u32; n + 1];
+    for &(a, _) in edges {
+        start[a as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut out = vec![0u32; edges.len()];
+    for (i, &(a, _)) in edges.iter().enumerate() {
+        out[fill[a as usize] as usize] = i as u32;
+        fill[a as usize] += 1;
+    }
+    let mut next_free = start.clone();
+    let mut seen = vec![false; edges.len()];
+    let mut loops = 0;
+    for s in 0..edges.len() {
+        if seen[s] {
+            continue;
+        }
+        loops += 1;
+        let mut e = s;
+        loop {
+            seen[e] = true;
+            let v = edges[e].1 as usize;
+            if v == edges[s].0 as usize {
+                break;
+            }
+            let mut found = None;
+            while next_free[v] < start[v + 1] {
+                let cand = out[next_free[v] as usize] as usize;
+                next_free[v] += 1;
+                if !seen[cand] {
+                    found = Some(cand);
+                    break;
+                }
+            }
+            match found {
+                Some(c) => e = c,
+                None => break,
+            }
+        }
+    }
+    loops
+}
+
+#[cfg(test)]
+mod tests {
+    use super::count_loops;
+
+    #[test]
+    fn loops_of_two_squares_sharing_a_vertex_count_two() {
+        // 0-1-2-3 and 0-4-5-6, both through vertex 0 (a pinch).
+        let e = [
+            (0, 1),
+            (1, 2),
+            (2, 3),
+            (3, 0),
+            (0, 4),
+            (4, 5),
+            (5, 6),
+            (6, 0),
+        ];
+        assert_eq!(count_loops(7, &e), 2);
+        assert_eq!(count_loops(7, &[]), 0);
+    }
+}

@@ -1,0 +1,189 @@
+//! `ball-pivoting`: the Ball-Pivoting Algorithm of Bernardini, Mittleman, Rushmeier,
+//! Silva and Taubin (IEEE TVCG 5(4), 1999), the interpolating baseline of seed 001's
+//! Table 2 and of the field (spec `shared/spec/001_priority_driven.md` §6,
+//! `000_ma_thesis.md` §3.3).
+//!
+//! A ball of radius ρ resting on three points with no point inside it gives a seed
+//! triangle; the ball then pivots about each front edge, keeping contact with the
+//! edge's two end points, until it touches another point, which makes a new triangle
+//! (its free edges join the front, edges that close against the front are glued).
+//! Point normals orient the triangles and reject inconsistent ones. As in Open3D and
+//! MeshLab, several radii run in increasing order: each new pass re-activates the
+//! boundary edges whose ball of the new radius is empty, pivots them, and seeds the
+//! points still unused.
+//!
+//! Output: the input points as vertices (duplicates and unused points unreferenced and
+//! refused), consistently oriented triangles, and diagnostics: triangles per radius,
+//! boundary edges and loops, unused points, pivot failures by cause. Needs oriented
+//! normals. See `docs/methods/ball_pivoting.md`.
+//!
+//! Files: [`params`], `input` (checks and deduplication, shared with `poisson`),
+//! `geometry` (ball centres, pivot angles), `mesher` (front, seeds, pivoting).
+
+mod geometry;
+pub(crate) mod input;
+mod mesher;
+pub mod params;
+
+use reconbench_geom::method::{
+    Describe, Diagnostic, Diagnostics, MethodError, Needs, ParamDoc, Reconstruction, Reconstructor,
+    RunCtx,
+};
+use reconbench_geom::spatial::PointIndex;
+use reconbench_geom::{PointCloud, TriMesh};
+
+pub use params::{BallPivotingParams, PARAM_DOCS};
+
+use mesher::{Mesher, count_loops};
+
+/// Registry name.
+pub const NAME: &str = "ball-pivoting";
+
+/// The `ball-pivoting` reconstructor.
+#[derive(Debug, Clone, Default)]
+pub struct BallPivoting {
+    /// Parameters.
+    pub params: BallPivotingParams,
+}
+
+impl BallPivoting {
+    /// A reconstructor with validated parameters.
+    pub fn new(params: BallPivotingParams) -> Result<Self, MethodError> {
+        params.validate()?;
+        Ok(Self { params })
+    }
+}
+
+impl Describe for BallPivoting {
+    const NAME: &'static str = NAME;
+    const SOURCE: &'static str = "baseline (Bernardini et al. 1999; seed 001 Table 2)";
+    const SUMMARY: &'static str =
+        "ball pivoting: an interpolating front grown by a rolling ball, several radii";
+    const NEEDS: Needs = Needs::OrientedNormals;
+    type Params = BallPivotingParams;
+    const PARAMS: &'static [ParamDoc] = PARAM_DOCS;
+
+    fn from_params(params: BallPivotingParams) -> Result<Self, MethodError> {
+        Self::new(params)
+    }
+}
+
+fn num(d: &mut Diagnostics, k: &str, v: f64) {
+    d.insert(k.to_string(), Diagnostic::Number(v));
+}
+
+impl Reconstructor for BallPivoting {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn reconstruct(
+        &self,
+        cloud: &PointCloud,
+        ctx: &mut RunCtx,
+    ) -> Result<Reconstruction, MethodError> {
+        let p = &self.params;
+        p.validate()?;
+        let prep = ctx.phase("prepare", || {
+            input::prepare(cloud, NAME, p.max_flipped_share)
+        })?;
+        ctx.checkpoint()?;
+        let radii: Vec<f64> = if p.radii.is_empty() {
+            p.radii_spacing.iter().map(|k| k * prep.spacing).collect()
+        } else {
+            p.radii.clone()
+        };
+        let r_max = radii.last().copied().unwrap_or(0.0);
+        // All neighbours within 2 r_max of every point, in parallel: every ball of
+        // radius r touching point i lies within 2 r of it, so a sorted prefix of this
+        // row serves every radius.
+        let nbrs = ctx.phase("neighbours", || {
+            PointIndex::new(&prep.pos)?.radius_batch(&prep.pos, 2.0 * r_max)
+        })?;
+        ctx.checkpoint()?;
+
+        let mut m = Mesher::new(&prep.pos, &prep.nrm, &nbrs);
+        let mut per_radius = Vec::with_capacity(radii.len());
+        let mut stop: Option<MethodError> = None;
+        let target = 2.0 * prep.pos.len() as f64;
+        {
+            let _g = ctx.phase_guard("pivot");
+            let mut poll = |tris: usize| match ctx.checkpoint() {
+                Ok(()) => {
+                    ctx.progress((tris as f64 / target).min(0.99));
+                    true
+                }
+                Err(e) => {
+                    stop = Some(e);
+                    false
+                }
+            };
+            'radii: for (r, &rho) in radii.iter().enumerate() {
+                m.set_radius(rho);
+                let before = m.tris.len();
+                if r > 0 {
+                    m.reactivate();
+                }
+                m.expand(&mut poll);
+                let mut cursor = 0;
+                while m.find_seed(&mut cursor) {
+                    m.expand(&mut poll);
+                    if !poll(m.tris.len()) {
+                        break 'radii;
+                    }
+                }
+                per_radius.push((m.tris.len() - before) as f64);
+            }
+        }
+        if let Some(e) = stop {
+            return Err(e);
+        }
+
+        let boundary = m.boundary_edges();
+        let loops = count_loops(prep.pos.len(), &boundary);
+        let faces: Vec<[u32; 3]> = m
+            .tris
+            .iter()
+            .map(|t| t.map(|v| prep.ids[v as usize]))
+            .collect();
+        let mut referenced = vec![false; cloud.len()];
+        for f in &faces {
+            for &v in f {
+                referenced[v as usize] = true;
+            }
+        }
+        let refused: Vec<u32> = (0..cloud.len() as u32)
+            .filter(|&i| !referenced[i as usize])
+            .collect();
+        let unused = (0..prep.pos.len()).filter(|&i| !m.is_used(i)).count();
+
+        let mut d = Diagnostics::new();
+        num(&mut d, "spacing", prep.spacing);
+        d.insert("radii".into(), Diagnostic::Series(radii.clone()));
+        d.insert(
+            "triangles_per_radius".into(),
+            Diagnostic::Series(per_radius),
+        );
+        num(&mut d, "boundary_edges", boundary.len() as f64);
+        num(&mut d, "boundary_loops", loops as f64);
+        num(&mut d, "unused_points", unused as f64);
+        num(&mut d, "duplicates", prep.duplicates as f64);
+        num(&mut d, "zero_normals", prep.zero_normals as f64);
+        num(&mut d, "flipped_share", prep.flipped_share);
+        let c = m.counts;
+        num(&mut d, "seeds", c.seeds as f64);
+        num(&mut d, "glued", c.glued as f64);
+        num(&mut d, "reactivated", c.reactivated as f64);
+        num(&mut d, "pivot_no_hit", c.no_hit as f64);
+        num(&mut d, "pivot_inner_hit", c.inner_hit as f64);
+        num(&mut d, "pivot_edge_conflict", c.edge_conflict as f64);
+        num(&mut d, "pivot_normal_conflict", c.normal_conflict as f64);
+
+        let mesh = TriMesh::new(cloud.positions().to_vec(), faces)?;
+        Ok(Reconstruction {
+            mesh,
+            refused,
+            diagnostics: d,
+        })
+    }
+}
