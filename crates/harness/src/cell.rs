@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use reconbench_geom::method::{Diagnostic, Diagnostics, FeatureClass, RunCtx};
+use reconbench_geom::method::{
+    Diagnostic, Diagnostics, FeatureClass, INTERPOLATING_DIAGNOSTIC, RunCtx,
+};
 use reconbench_metrics::{Reference, Report, eval_features, eval_mesh, eval_normals};
 use reconbench_synth::Shape;
 use serde_json::Value;
@@ -90,6 +92,29 @@ pub const DIAGNOSTIC_METRICS: &[&str] = &[
     "dev_above_eps",
 ];
 
+/// Metrics that count input points as mesh vertices (the seed's V is the number of
+/// input points): meaningless for a mesh with new vertices (Poisson's), so left out of
+/// its rows.
+pub const VERTEX_CLAIMS: &[&str] = &[
+    "vertices",
+    "referenced_vertices",
+    "unreferenced_vertices",
+    "delta_f",
+];
+
+/// Whether a reconstruction interpolates its input: true unless the method set the
+/// [`INTERPOLATING_DIAGNOSTIC`] to 0.
+fn interpolating(d: &Diagnostics) -> bool {
+    !matches!(d.get(INTERPOLATING_DIAGNOSTIC), Some(Diagnostic::Number(x)) if *x == 0.0)
+}
+
+/// Removes the [`VERTEX_CLAIMS`] from a row.
+fn drop_vertex_claims(metrics: &mut BTreeMap<String, f64>) {
+    for k in VERTEX_CLAIMS {
+        metrics.remove(*k);
+    }
+}
+
 /// Keeps deterministic numeric entries (timings of the evaluation itself are cost, not
 /// metrics, and are left out so that rows compare byte for byte).
 fn keep_metrics(row: BTreeMap<String, f64>) -> BTreeMap<String, f64> {
@@ -160,6 +185,7 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             let t = Instant::now();
             out.diagnostics = diagnostics_json(&r.diagnostics);
             let outliers_in = data.is_outlier.iter().filter(|&&o| o).count();
+            let input_before = data.input.positions().to_vec();
             crate::pipeline::replace_cloud(&mut data, r, n_in, shape.as_deref())
                 .map_err(|e| format!("method: {e}"))?;
             let outliers_out = data.is_outlier.iter().filter(|&&o| o).count();
@@ -175,6 +201,14 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
                 None => Vec::new(),
             };
             out.metrics = filter_metrics(n_in, data.input.len(), outliers_in, outliers_out, &d);
+            out.metrics.extend(projection_metrics(
+                &data.input,
+                &input_before,
+                shape.as_deref(),
+                reference.as_ref(),
+                diag,
+                opts.features.feature_angle_deg,
+            ));
             out.dist = Dist::of("point distance (diag)", &d);
             out.metrics_s = t.elapsed().as_secs_f64();
         }
@@ -253,6 +287,9 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             o.distance.vertex_error = true;
             let Some(reference) = &reference else {
                 out.metrics = keep_metrics(without_ground_truth(&r.mesh, &o));
+                if !interpolating(&r.diagnostics) {
+                    drop_vertex_claims(&mut out.metrics);
+                }
                 out.metrics_s = t.elapsed().as_secs_f64();
                 out.diagnostics = diagnostics_json(&r.diagnostics);
                 out.phases = ctx.phases();
@@ -260,10 +297,14 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             };
             let ev = eval_mesh(&r.mesh, reference, &o).map_err(|e| format!("metrics: {e}"))?;
             out.metrics = keep_metrics(ev.to_row());
-            // Refused points against the generator's outliers (seed 001 §4.4).
-            let re = reconbench_metrics::eval_refused(&r.refused, &data.is_outlier)
-                .map_err(|e| format!("metrics: {e}"))?;
-            out.metrics.extend(keep_metrics(re.to_row()));
+            if interpolating(&r.diagnostics) {
+                // Refused points against the generator's outliers (seed 001 §4.4).
+                let re = reconbench_metrics::eval_refused(&r.refused, &data.is_outlier)
+                    .map_err(|e| format!("metrics: {e}"))?;
+                out.metrics.extend(keep_metrics(re.to_row()));
+            } else {
+                drop_vertex_claims(&mut out.metrics);
+            }
             for k in DIAGNOSTIC_METRICS {
                 if let Some(reconbench_geom::method::Diagnostic::Number(x)) = r.diagnostics.get(*k)
                     && x.is_finite()
@@ -325,6 +366,64 @@ fn without_ground_truth(
     row
 }
 
+/// Metrics of a projecting filter (seed 002 ch. 4, `reconbench_metrics::filter_eval`):
+/// distance of the output to the filter's input and to the surface, normal error near
+/// and away from the true features, and the error of the feature lines `mls-sharp`
+/// attaches as channels.
+fn projection_metrics(
+    output: &reconbench_geom::PointCloud,
+    input: &[reconbench_geom::DVec3],
+    shape: Option<&dyn Shape>,
+    reference: Option<&Reference>,
+    diag: f64,
+    feature_angle_deg: f64,
+) -> BTreeMap<String, f64> {
+    use reconbench_filters::mls_sharp::{LINE_CHANNELS, LINE_FLAG_CHANNEL};
+    use reconbench_geom::Channel;
+    if output.is_empty() || input.is_empty() {
+        return BTreeMap::new();
+    }
+    let mut lines = Vec::new();
+    if let Some(Channel::Label(flag)) = output.channel(LINE_FLAG_CHANNEL) {
+        let ch: Vec<&Channel> = LINE_CHANNELS
+            .iter()
+            .filter_map(|n| output.channel(n))
+            .collect();
+        if ch.len() == 12 {
+            for (i, _) in flag.iter().enumerate().filter(|(_, f)| **f != 0) {
+                let c = |j: usize| {
+                    reconbench_geom::DVec3::new(
+                        ch[3 * j].get_f64(i),
+                        ch[3 * j + 1].get_f64(i),
+                        ch[3 * j + 2].get_f64(i),
+                    )
+                };
+                lines.push([c(0), c(1), c(2), c(3)]);
+            }
+        }
+    }
+    let opts = reconbench_metrics::FilterEvalOptions {
+        feature_angle_deg,
+        ..Default::default()
+    };
+    let curves = reference.map(|r| r.feature_curves(feature_angle_deg));
+    let truth = shape.zip(curves.as_deref());
+    // A cloud these metrics cannot measure (fewer than two distinct points) leaves them
+    // out rather than failing the cell, as the filter itself succeeded.
+    match reconbench_metrics::eval_filter(
+        output.positions(),
+        output.normals(),
+        input,
+        truth,
+        &lines,
+        diag,
+        &opts,
+    ) {
+        Ok(ev) => keep_metrics(ev.to_row()),
+        Err(_) => BTreeMap::new(),
+    }
+}
+
 /// Metrics of a filter's output cloud: distances of its non-outlier points to the
 /// surface (fractions of the diagonal), point counts and the share of the generator's
 /// outliers it removed.
@@ -358,4 +457,25 @@ fn filter_metrics(
         );
     }
     keep_metrics(m)
+}
+
+#[cfg(test)]
+mod interpolating_tests {
+    use super::*;
+
+    #[test]
+    fn a_non_interpolating_mesh_claims_no_vertex_counts_or_delta_f() {
+        let mut d = Diagnostics::new();
+        assert!(interpolating(&d));
+        d.insert(INTERPOLATING_DIAGNOSTIC.into(), Diagnostic::Number(1.0));
+        assert!(interpolating(&d));
+        d.insert(INTERPOLATING_DIAGNOSTIC.into(), Diagnostic::Number(0.0));
+        assert!(!interpolating(&d));
+        let mut row: BTreeMap<String, f64> = ["vertices", "delta_f", "faces", "genus"]
+            .iter()
+            .map(|k| (k.to_string(), 1.0))
+            .collect();
+        drop_vertex_claims(&mut row);
+        assert_eq!(row.keys().collect::<Vec<_>>(), ["faces", "genus"]);
+    }
 }
