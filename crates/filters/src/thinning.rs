@@ -222,7 +222,7 @@ impl Filter for GridThinning {
         let bb = Aabb::from_points(p);
         let diag = bb.diagonal();
         let mut d = Diagnostics::new();
-        if target >= p.len() || !(diag > 0.0) {
+        if target >= p.len() || diag.is_nan() || diag <= 0.0 {
             let kept: Vec<u32> = if diag > 0.0 {
                 (0..p.len() as u32).collect()
             } else {

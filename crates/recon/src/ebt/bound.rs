@@ -6,7 +6,7 @@ use super::params::{BinRule, OmegaRule};
 /// Omega for tolerance `eps` and curvature term `m_sum = M1 + 2 M2 + M3`; infinite when
 /// `m_sum` is 0 (a plane: any edge interpolates it exactly).
 pub fn omega(eps: f64, m_sum: f64, rule: OmegaRule) -> f64 {
-    if !(m_sum > 0.0) {
+    if m_sum.is_nan() || m_sum <= 0.0 {
         return f64::INFINITY;
     }
     match rule {

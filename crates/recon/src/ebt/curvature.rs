@@ -83,7 +83,7 @@ pub fn fit_quadric(centre: DVec3, nbrs: &[DVec3]) -> Option<[f64; 3]> {
     }
     let e = sym_eigen3(ata).ok()?;
     let (lo, hi) = (e.values[0].abs(), e.values[2].abs());
-    if !(hi > 0.0) || lo * MAX_COND < hi {
+    if hi.is_nan() || hi <= 0.0 || lo * MAX_COND < hi {
         return None;
     }
     let x = ata.inverse() * atb;

@@ -70,7 +70,7 @@ pub fn strictly_inside(p: DVec2, a: DVec2, b: DVec2, c: DVec2) -> bool {
 pub fn interior_distance(p: DVec3, a: DVec3, b: DVec3) -> Option<f64> {
     let ab = b - a;
     let l2 = ab.length_squared();
-    if !(l2 > 0.0) {
+    if l2.is_nan() || l2 <= 0.0 {
         return None;
     }
     let t = (p - a).dot(ab) / l2;

@@ -70,7 +70,7 @@ fn check_input(cloud: &PointCloud, need: usize) -> Result<f64, MethodError> {
         )));
     }
     let diag = cloud.aabb().diagonal();
-    if !(diag > 0.0) {
+    if diag.is_nan() || diag <= 0.0 {
         return Err(MethodError::InvalidInput(
             "all points coincide (zero bounding-box diagonal)".into(),
         ));
