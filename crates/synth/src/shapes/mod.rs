@@ -31,6 +31,7 @@ pub mod prism;
 pub mod revolved;
 pub mod sheet;
 pub mod slab;
+pub mod standins;
 
 pub use mesh_shape::{DEFAULT_MESH_FEATURE_ANGLE_DEG, MeshShape, MeshShapeOptions};
 
@@ -476,6 +477,39 @@ static DEFS: &[ShapeDef] = &[
             let amp = p.in_range("amp", 0.0, 0.5)?;
             let freq = p.in_range("freq", 0.0, 3.0)?;
             Ok(boxed("height-field", sheet::HeightField::new(amp, freq)))
+        },
+    },
+    ShapeDef {
+        name: "mask",
+        summary: "seed 004 stand-in: open mask-like free-form height field, 250 x 200 x 60 mm (dome, nose, brow ridge, eye hollows)",
+        params: &[],
+        build: |_| {
+            Ok(boxed(
+                "mask",
+                standins::StandIn::new(standins::StandInKind::Mask),
+            ))
+        },
+    },
+    ShapeDef {
+        name: "poly-part",
+        summary: "seed 004 stand-in: 150 x 150 mm plane with a cylindrical ridge (r 25, 20 high) and a spherical cap (r 40, 30 high), creased",
+        params: &[],
+        build: |_| {
+            Ok(boxed(
+                "poly-part",
+                standins::StandIn::new(standins::StandInKind::PolyPart),
+            ))
+        },
+    },
+    ShapeDef {
+        name: "blade",
+        summary: "seed 004 stand-in: twisted, cambered blade-like plate, 240 x 180 x 65 mm",
+        params: &[],
+        build: |_| {
+            Ok(boxed(
+                "blade",
+                standins::StandIn::new(standins::StandInKind::Blade),
+            ))
         },
     },
     ShapeDef {
