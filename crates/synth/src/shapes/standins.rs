@@ -8,7 +8,7 @@
 //!   meet the plane in creases (the polyhedral object);
 //! * `blade` (240 x 180 x 65 mm): a twisted, cambered plate (the turbine blade).
 //!
-//! Closest points: multi-start Gauss-Newton on the parameter rectangle from the 16
+//! Closest points: multi-start Newton on the parameter rectangle from the 12
 //! nearest of a 129 x 129 seed grid (exact to solver tolerance on the smooth parts; at
 //! the creases of `poly-part` the best of the local minima). Ray casts: marching in
 //! steps of 1/800 of the box diagonal with bisection (the scanner's line-of-sight query).
@@ -190,7 +190,7 @@ impl StandIn {
         let (lo, hi) = (-self.h, self.h);
         let mut q = q0;
         let mut fq = obj(q);
-        for it in 0..300 {
+        for it in 0..120 {
             let g = self.grad(q.x, q.y);
             let r = self.at(q) - p;
             // Gradient of |r|^2 / 2 and its (Gauss-)Newton matrix.
@@ -241,7 +241,7 @@ impl StandIn {
 
 impl Geometry for StandIn {
     fn closest(&self, p: DVec3) -> SurfacePoint {
-        let cands = self.seeds.knn(p, 16).expect("finite query");
+        let cands = self.seeds.knn(p, 12).expect("finite query");
         let mut best: Option<(f64, DVec2)> = None;
         for c in cands {
             let q = self.descend(p, self.seed_uv[c.index as usize]);
