@@ -74,15 +74,24 @@ impl PivotFrame {
         })
     }
 
-    /// Rotation angle in `[0, 2π)` from the current centre to centre `x`.
+    /// A monotone stand-in for the rotation angle from the current centre to centre
+    /// `x`, in `[0, 4)` (the "diamond angle": `0` at the current centre, `1` a quarter
+    /// turn, `2` half a turn); cheaper than `atan2` and enough to order contacts.
     #[inline]
     pub fn angle(&self, x: DVec3) -> f64 {
         let d = x - self.m;
-        let t = d.dot(self.e2).atan2(d.dot(self.e1));
-        if t < 0.0 {
-            t + std::f64::consts::TAU
-        } else {
-            t
+        let (c, s) = (d.dot(self.e1), d.dot(self.e2));
+        let (ac, as_) = (c.abs(), s.abs());
+        let sum = ac + as_;
+        if sum == 0.0 {
+            return 0.0;
+        }
+        let t = as_ / sum;
+        match (c >= 0.0, s >= 0.0) {
+            (true, true) => t,
+            (false, true) => 2.0 - t,
+            (false, false) => 2.0 + t,
+            (true, false) => 4.0 - t,
         }
     }
 }
@@ -116,12 +125,12 @@ mod tests {
         let (a, b, o) = (DVec3::ZERO, DVec3::X, DVec3::new(0.5, 0.8, 0.0));
         let c = ball_centre(a, b, o, 1.0).unwrap();
         let f = PivotFrame::new(a, b, c).unwrap();
-        assert!(f.angle(c) < 1e-12 || f.angle(c) > std::f64::consts::TAU - 1e-12);
+        assert!(f.angle(c) < 1e-12 || f.angle(c) > 4.0 - 1e-12);
         // A point just across the edge (-y) is hit after a small rotation, one on o's
         // side only after almost a full turn.
         let across = ball_centre(b, a, DVec3::new(0.5, -0.8, 0.0), 1.0).unwrap();
         let behind = ball_centre(b, a, DVec3::new(0.5, 0.9, 0.0), 1.0).unwrap();
         assert!(f.angle(across) < f.angle(behind));
-        assert!(f.angle(across) < std::f64::consts::PI);
+        assert!(f.angle(across) < 2.0);
     }
 }

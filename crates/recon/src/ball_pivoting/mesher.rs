@@ -11,7 +11,8 @@
 use std::collections::{HashMap, VecDeque};
 
 use glam::DVec3;
-use reconbench_geom::spatial::RadiusTable;
+use reconbench_geom::method::MethodError;
+use reconbench_geom::spatial::PointIndex;
 
 use super::geometry::{PivotFrame, ball_centre, ball_centres};
 
@@ -67,8 +68,13 @@ pub(crate) struct Counts {
 pub(crate) struct Mesher<'a> {
     pos: &'a [DVec3],
     nrm: &'a [DVec3],
-    /// Neighbours of each point within `2 * max radius`, sorted by distance (self first).
-    nbrs: &'a RadiusTable,
+    /// The spatial index of `pos`.
+    index: &'a PointIndex,
+    /// Per point: its row of neighbours within `2 * rho` for the current radius
+    /// (`NO_ROW` until first needed), as `(start, len)` into `nb_idx`.
+    nb_row: Vec<u32>,
+    nb_span: Vec<(u32, u32)>,
+    nb_idx: Vec<u32>,
     /// Whether a point has been used by a triangle.
     used: Vec<bool>,
     /// Per vertex: incident edges with exactly one triangle.
@@ -95,17 +101,23 @@ fn key(a: u32, b: u32) -> u64 {
 /// to the centre than `rho * (1 - EMPTY_TOL)`.
 const EMPTY_TOL: f64 = 1e-9;
 
+/// No neighbour row yet in this pass.
+const NO_ROW: u32 = u32::MAX;
+
 impl<'a> Mesher<'a> {
     /// A mesher over `pos` with unit normals `nrm` (zero: unusable point) and the
-    /// neighbour table `nbrs`.
-    pub fn new(pos: &'a [DVec3], nrm: &'a [DVec3], nbrs: &'a RadiusTable) -> Self {
+    /// spatial index `index` of `pos`.
+    pub fn new(pos: &'a [DVec3], nrm: &'a [DVec3], index: &'a PointIndex) -> Self {
         let n = pos.len();
         let mut map = FastMap::default();
         map.reserve(3 * n);
         Self {
             pos,
             nrm,
-            nbrs,
+            index,
+            nb_row: vec![NO_ROW; n],
+            nb_span: Vec::new(),
+            nb_idx: Vec::new(),
             used: vec![false; n],
             open: vec![0; n],
             edges: Vec::with_capacity(3 * n),
@@ -118,18 +130,75 @@ impl<'a> Mesher<'a> {
         }
     }
 
-    /// Sets the ball radius of the next operations.
-    pub fn set_radius(&mut self, rho: f64) {
+    /// Sets the ball radius of the next operations and computes, in parallel, the
+    /// neighbour rows of `active` (the points the pass starts from); other points get
+    /// theirs when the front first reaches them. Every ball of radius `rho` touching a
+    /// point lies within `2 rho` of it, so the row holds every candidate.
+    pub fn begin_pass(&mut self, rho: f64, active: &[u32]) -> Result<(), MethodError> {
         self.rho = rho;
+        self.nb_row.fill(NO_ROW);
+        self.nb_span.clear();
+        self.nb_idx.clear();
+        let q: Vec<DVec3> = active.iter().map(|&i| self.pos[i as usize]).collect();
+        let t = self.index.radius_batch(&q, 2.0 * rho)?;
+        self.nb_idx.reserve(t.indices.len());
+        for (r, &i) in active.iter().enumerate() {
+            self.push_row(i, t.indices(r));
+        }
+        Ok(())
     }
 
-    /// Neighbours of `i` within `2 * rho` (a prefix of its sorted row).
+    fn push_row(&mut self, i: u32, row: &[u32]) {
+        self.nb_row[i as usize] = self.nb_span.len() as u32;
+        self.nb_span
+            .push((self.nb_idx.len() as u32, row.len() as u32));
+        self.nb_idx.extend_from_slice(row);
+    }
+
+    /// Computes the neighbour row of `i` if this pass has none yet.
     #[inline]
-    fn near(&self, i: u32) -> &'a [u32] {
-        let lim = 4.0 * self.rho * self.rho;
-        let d2 = self.nbrs.dist2(i as usize);
-        let k = d2.partition_point(|&d| d <= lim);
-        &self.nbrs.indices(i as usize)[..k]
+    fn ensure(&mut self, i: u32) {
+        if self.nb_row[i as usize] != NO_ROW {
+            return;
+        }
+        let row: Vec<u32> = self
+            .index
+            .radius(self.pos[i as usize], 2.0 * self.rho)
+            .map(|v| v.iter().map(|nb| nb.index).collect())
+            .unwrap_or_default();
+        self.push_row(i, &row);
+    }
+
+    /// Neighbours of `i` within `2 * rho`, sorted by distance (itself first); `i`'s
+    /// row must have been computed ([`Self::ensure`]).
+    #[inline]
+    fn near(&self, i: u32) -> &[u32] {
+        let r = self.nb_row[i as usize];
+        debug_assert!(r != NO_ROW, "no neighbour row for {i}");
+        match self.nb_span.get(r as usize) {
+            Some(&(s, l)) => &self.nb_idx[s as usize..(s + l) as usize],
+            None => &[],
+        }
+    }
+
+    /// Points a pass after the first starts from: the end points of boundary edges and
+    /// the unused points with a normal.
+    pub fn active_points(&self) -> Vec<u32> {
+        let mut mark = vec![false; self.pos.len()];
+        for e in &self.edges {
+            if e.state == EdgeState::Boundary {
+                mark[e.from as usize] = true;
+                mark[e.to as usize] = true;
+            }
+        }
+        for (i, m) in mark.iter_mut().enumerate() {
+            if !self.used[i] && self.nrm[i] != DVec3::ZERO {
+                *m = true;
+            }
+        }
+        (0..self.pos.len() as u32)
+            .filter(|&i| mark[i as usize])
+            .collect()
     }
 
     /// Whether no point near `i` lies strictly inside the ball at `c` (the points in
@@ -233,6 +302,7 @@ impl<'a> Mesher<'a> {
     /// the sphere touches gives the triangle `(b, a, k)` if it is valid.
     fn pivot(&mut self, e: &Edge) -> Option<(u32, DVec3)> {
         let (a, b, o) = (e.from, e.to, e.opp);
+        self.ensure(a);
         let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
         let frame = PivotFrame::new(pa, pb, e.centre)?;
         let w = {
@@ -317,6 +387,7 @@ impl<'a> Mesher<'a> {
             if self.used[s as usize] || self.nrm[s as usize] == DVec3::ZERO {
                 continue;
             }
+            self.ensure(s);
             if let Some((t, c)) = self.seed_at(s) {
                 self.counts.seeds += 1;
                 self.add_triangle(t, c);
@@ -381,6 +452,7 @@ impl<'a> Mesher<'a> {
             let Some(c) = ball_centre(p0, p1, p2, self.rho) else {
                 continue;
             };
+            self.ensure(edge.from);
             if self.empty(edge.from, c, t) {
                 let ed = &mut self.edges[e];
                 ed.centre = c;

@@ -93,18 +93,11 @@ impl Reconstructor for BallPivoting {
         } else {
             p.radii.clone()
         };
-        let r_max = radii.last().copied().unwrap_or(0.0);
-        // All neighbours within 2 r_max of every point, in parallel: every ball of
-        // radius r touching point i lies within 2 r of it, so a sorted prefix of this
-        // row serves every radius.
-        let nbrs = ctx.phase("neighbours", || {
-            PointIndex::new(&prep.pos)?.radius_batch(&prep.pos, 2.0 * r_max)
-        })?;
-        ctx.checkpoint()?;
-
-        let mut m = Mesher::new(&prep.pos, &prep.nrm, &nbrs);
+        let index = ctx.phase("index", || PointIndex::new(&prep.pos))?;
+        let mut m = Mesher::new(&prep.pos, &prep.nrm, &index);
         let mut per_radius = Vec::with_capacity(radii.len());
         let mut stop: Option<MethodError> = None;
+        let mut pass_err: Option<MethodError> = None;
         let target = 2.0 * prep.pos.len() as f64;
         {
             let _g = ctx.phase_guard("pivot");
@@ -119,7 +112,15 @@ impl Reconstructor for BallPivoting {
                 }
             };
             'radii: for (r, &rho) in radii.iter().enumerate() {
-                m.set_radius(rho);
+                let active: Vec<u32> = if r == 0 {
+                    (0..prep.pos.len() as u32).collect()
+                } else {
+                    m.active_points()
+                };
+                if let Err(e) = m.begin_pass(rho, &active) {
+                    pass_err = Some(e);
+                    break;
+                }
                 let before = m.tris.len();
                 if r > 0 {
                     m.reactivate();
@@ -135,7 +136,7 @@ impl Reconstructor for BallPivoting {
                 per_radius.push((m.tris.len() - before) as f64);
             }
         }
-        if let Some(e) = stop {
+        if let Some(e) = stop.or(pass_err) {
             return Err(e);
         }
 
