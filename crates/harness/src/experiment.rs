@@ -957,6 +957,11 @@ fn expand_method(m: &MethodSpec) -> Result<Vec<MethodConfig>> {
         })
         .collect::<Result<_>>()?;
     pipeline::validate_chain(&entries, false)?;
+    if m.label.is_none() && entries.iter().any(|e| e.name.starts_with("external")) {
+        return Err(HarnessError::input(
+            "an external method needs a 'label' (the name its rows are shown under)",
+        ));
+    }
     // One table over all steps' parameters: keys `j:name` (step j), the last step's
     // own `params` at the end.
     let last = steps.len() - 1;

@@ -45,6 +45,8 @@ fn entries() -> Vec<MethodEntry> {
     ];
     // Algorithm crates: one line each in methods/algorithms.rs.
     v.extend(crate::methods::algorithms::entries());
+    // External programs (a command template per experiment entry).
+    v.extend(crate::methods::external::entries());
     v
 }
 

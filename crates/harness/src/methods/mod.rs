@@ -1,6 +1,7 @@
-//! Methods the harness registers: ground-truth oracles, test-only methods, and the
-//! entries of the algorithm crates ([`algorithms`]).
+//! Methods the harness registers: ground-truth oracles, test-only methods, external
+//! programs ([`external`]) and the entries of the algorithm crates ([`algorithms`]).
 
 pub mod algorithms;
 pub mod debug;
+pub mod external;
 pub mod oracle;
