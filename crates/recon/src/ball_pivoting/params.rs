@@ -22,7 +22,7 @@ pub struct BallPivotingParams {
 impl Default for BallPivotingParams {
     fn default() -> Self {
         Self {
-            radii_spacing: vec![1.25, 2.5, 5.0],
+            radii_spacing: vec![2.0, 3.0, 5.0],
             radii: Vec::new(),
             max_flipped_share: 0.2,
         }
