@@ -646,7 +646,7 @@ fn kind_plots(
     let metrics: Vec<String> = if opts.plot_metrics.is_empty() {
         columns
             .iter()
-            .filter(|c| *c != TIME_COLUMN)
+            .filter(|c| *c != TIME_COLUMN && *c != tables::PEER_RATIO_COLUMN)
             .take(2)
             .cloned()
             .collect()

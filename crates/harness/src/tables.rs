@@ -14,12 +14,16 @@ use crate::registry::MethodKind;
 /// Column of method time (from `cost`).
 pub const TIME_COLUMN: &str = "method_s";
 
+/// Column of method time over the fastest external program's on the same input, added
+/// after [`TIME_COLUMN`] when a table holds external methods (the peers).
+pub const PEER_RATIO_COLUMN: &str = "time_vs_fastest_peer";
+
 /// A table for one method kind.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Table {
     /// Method kind.
     pub kind: MethodKind,
-    /// Metric columns (the last is [`TIME_COLUMN`]).
+    /// Metric columns, then [`TIME_COLUMN`] (and [`PEER_RATIO_COLUMN`] with peers).
     pub columns: Vec<String>,
     /// Rows.
     pub rows: Vec<TableRow>,
@@ -98,6 +102,9 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
                 oracle: crate::registry::find(&g.method).is_ok_and(|e| e.needs_ground_truth),
             })
             .collect();
+        if gs.iter().any(|g| g.method.starts_with("external")) {
+            add_peer_ratio(&gs, &mut columns, &mut rows);
+        }
         // Best per column within each (dataset, perturbation) block, among the methods
         // that had to work for it (not the oracles).
         for ci in 0..columns.len() {
@@ -142,6 +149,33 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
     out
 }
 
+/// Appends [`PEER_RATIO_COLUMN`]: each row's mean method time over the smallest mean
+/// method time of an external method in its (dataset, perturbation) block.
+fn add_peer_ratio(gs: &[&Group], columns: &mut Vec<String>, rows: &mut [TableRow]) {
+    let ti = columns.len() - 1;
+    columns.push(PEER_RATIO_COLUMN.to_string());
+    let fastest = |d: &str, p: &str| {
+        gs.iter()
+            .zip(rows.iter())
+            .filter(|(g, r)| g.method.starts_with("external") && r.dataset == d && r.perturb == p)
+            .filter_map(|(_, r)| r.values[ti].map(|s| s.mean))
+            .filter(|t| *t > 0.0)
+            .fold(None, |a: Option<f64>, t| Some(a.map_or(t, |a| a.min(t))))
+    };
+    let ratios: Vec<Option<Stat>> = rows
+        .iter()
+        .map(|r| {
+            let f = fastest(&r.dataset, &r.perturb)?;
+            let t = r.values[ti]?.mean;
+            Stat::of(&[t / f])
+        })
+        .collect();
+    for (r, v) in rows.iter_mut().zip(ratios) {
+        r.values.push(v);
+        r.best.push(false);
+    }
+}
+
 /// A number with 4 significant digits.
 pub fn fmt_num(x: f64) -> String {
     if !x.is_finite() {
@@ -171,6 +205,8 @@ fn cell_text(s: &Option<Stat>) -> String {
 pub fn heading(c: &str) -> String {
     if c == TIME_COLUMN {
         "time (s)".into()
+    } else if c == PEER_RATIO_COLUMN {
+        "time / fastest peer".into()
     } else if higher_is_better(c) {
         format!("{c} ↑")
     } else {
@@ -412,5 +448,35 @@ mod tests {
         assert!(row("jet").best[0], "the best real method is bold");
         let md = markdown(t);
         assert!(md.contains("*gt-normals* (oracle)"), "{md}");
+    }
+
+    #[test]
+    fn times_are_divided_by_the_fastest_peer_of_the_block() {
+        let mut peer = group("external-normals", 4.0);
+        peer.labels.method = "CGAL jet".into();
+        let mut slow = group("external-normals", 8.0);
+        slow.labels.method = "slow peer".into();
+        let groups = vec![group("pf", 2.0), peer, slow];
+        let t = &build(&groups, &[])[0];
+        assert_eq!(t.columns.last().unwrap(), PEER_RATIO_COLUMN);
+        let ratio = |m: &str| {
+            t.rows
+                .iter()
+                .find(|r| r.method == m)
+                .unwrap()
+                .values
+                .last()
+                .unwrap()
+                .unwrap()
+                .mean
+        };
+        assert_eq!(
+            (ratio("pf"), ratio("CGAL jet"), ratio("slow peer")),
+            (0.5, 1.0, 2.0)
+        );
+        assert!(markdown(t).contains("time / fastest peer"));
+        // Without an external method there is no such column.
+        let t = &build(&[group("pf", 2.0), group("jet", 1.0)], &[])[0];
+        assert_eq!(t.columns.last().unwrap(), TIME_COLUMN);
     }
 }
