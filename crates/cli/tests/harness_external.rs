@@ -91,9 +91,15 @@ params = {{ command = "true" }}
     let fails = find("fails");
     assert_eq!(fails["status"], "error", "{fails}");
     let e = fails["error"].as_str().unwrap();
-    assert!(e.contains("boom-from-the-program") && e.contains("7"), "{e}");
+    assert!(
+        e.contains("boom-from-the-program") && e.contains("7"),
+        "{e}"
+    );
     let hangs = find("hangs");
-    assert!(hangs["status"] == "timeout" || hangs["status"] == "error", "{hangs}");
+    assert!(
+        hangs["status"] == "timeout" || hangs["status"] == "error",
+        "{hangs}"
+    );
     assert!(
         !std::fs::read_dir("/proc").unwrap().flatten().any(|p| {
             std::fs::read_to_string(p.path().join("cmdline"))

@@ -8,6 +8,9 @@
 //!   watertight manifold Delaunay reconstruction, and `ufm-mesh`, its local-mesh
 //!   normal estimator (ch. 4, Algorithm B).
 //!
+//! * [`cocone`] — `cocone` (Amenta, Choi, Dey & Leekha 2002) and `tight-cocone` (Dey &
+//!   Goswami 2003), the Delaunay baselines of seeds 000 and 001.
+//!
 //! * [`ball_pivoting`] — `ball-pivoting`, the Ball-Pivoting Algorithm (Bernardini et
 //!   al. 1999), the interpolating baseline of seed 001.
 //! * [`poisson`] — `poisson`, Poisson surface reconstruction (Kazhdan, Bolitho & Hoppe
@@ -17,12 +20,14 @@
 //! `Params` struct with documented defaults.
 
 pub mod ball_pivoting;
+pub mod cocone;
 pub mod ebt;
 pub mod poisson;
 pub mod priority_front;
 pub mod ufm;
 
 pub use ball_pivoting::{BallPivoting, BallPivotingParams};
+pub use cocone::{Cocone, CoconeParams, TightCocone, TightCoconeParams};
 pub use ebt::{Ebt, EbtParams};
 pub use poisson::{Poisson, PoissonParams};
 pub use priority_front::{PriorityFront, PriorityFrontParams};

@@ -9,7 +9,7 @@ use reconbench_filters::{Mls, MlsSharp};
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
 use reconbench_recon::Ebt;
 use reconbench_recon::{BallPivoting, Poisson};
-use reconbench_recon::{PriorityFront, Ufm, UfmMesh};
+use reconbench_recon::{Cocone, PriorityFront, TightCocone, Ufm, UfmMesh};
 
 use crate::entry::{MethodEntry, features, filter, normals, reconstruct};
 
@@ -33,6 +33,8 @@ pub fn entries() -> Vec<MethodEntry> {
         reconstruct::<PriorityFront>(),
         reconstruct::<Ebt>(),
         reconstruct::<Ufm>(),
+        reconstruct::<Cocone>(),
+        reconstruct::<TightCocone>(),
         reconstruct::<BallPivoting>(),
         reconstruct::<Poisson>(),
     ]

@@ -128,7 +128,10 @@ impl External {
     /// Checks the template and formats.
     pub fn new(name: &'static str, params: ExternalParams) -> Result<Self, MethodError> {
         if params.command.trim().is_empty() {
-            return Err(bad("command", "an external method needs a command template"));
+            return Err(bad(
+                "command",
+                "an external method needs a command template",
+            ));
         }
         let (input, want_normals) = match params.input.as_str() {
             "" | "ply" => (Format::Ply, false),
@@ -295,9 +298,8 @@ impl Scratch {
             std::process::id(),
             NEXT.fetch_add(1, Ordering::Relaxed)
         ));
-        std::fs::create_dir_all(&dir).map_err(|e| {
-            MethodError::Failed(format!("cannot create {}: {e}", dir.display()))
-        })?;
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| MethodError::Failed(format!("cannot create {}: {e}", dir.display())))?;
         Ok(Self(dir))
     }
 }
@@ -349,7 +351,9 @@ fn run_command(
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| MethodError::Failed(format!("cannot start sh for the external command: {e}")))?;
+        .map_err(|e| {
+            MethodError::Failed(format!("cannot start sh for the external command: {e}"))
+        })?;
     let pgid = child.id();
     let mut err = child.stderr.take();
     let reader = std::thread::spawn(move || {
@@ -506,7 +510,12 @@ pub fn entries() -> Vec<MethodEntry> {
             "external program",
             "any program that reads a cloud file and writes it back with normals",
             DOCS,
-            |p, _| Ok(Built::Normals(Box::new(External::new("external-normals", p)?))),
+            |p, _| {
+                Ok(Built::Normals(Box::new(External::new(
+                    "external-normals",
+                    p,
+                )?)))
+            },
         ),
         custom::<ExternalParams>(
             MethodKind::Filter,
@@ -514,7 +523,12 @@ pub fn entries() -> Vec<MethodEntry> {
             "external program",
             "any program that reads a cloud file and writes a cloud",
             DOCS,
-            |p, _| Ok(Built::Filter(Box::new(External::new("external-filter", p)?))),
+            |p, _| {
+                Ok(Built::Filter(Box::new(External::new(
+                    "external-filter",
+                    p,
+                )?)))
+            },
         ),
     ]
 }
