@@ -2,6 +2,8 @@
 //!
 //! * [`ebt`] — `ebt`, error-bounded thinning and seed-grown triangulation of Sun,
 //!   Bradley, Zhang & Loh (CAD 2001), spec 004.
+//! * [`hc_it`] — `hc-it`, hierarchical clustering and incremental triangulation of
+//!   Sritrakulchai & Sangveraphunsiri, spec 003.
 //! * [`priority_front`] — `priority-front`, the priority-driven advancing front of Li,
 //!   Han & Wee (CAD 2009), spec 001.
 //! * [`ufm`] — `ufm`, Umbrella Facet Matching (Ma 2011, ch. 3, spec 000 §1.1): a
@@ -22,6 +24,7 @@
 pub mod ball_pivoting;
 pub mod cocone;
 pub mod ebt;
+pub mod hc_it;
 pub mod poisson;
 pub mod priority_front;
 pub mod ufm;
@@ -29,6 +32,7 @@ pub mod ufm;
 pub use ball_pivoting::{BallPivoting, BallPivotingParams};
 pub use cocone::{Cocone, CoconeParams, TightCocone, TightCoconeParams};
 pub use ebt::{Ebt, EbtParams};
+pub use hc_it::{HcIt, HcItParams};
 pub use poisson::{Poisson, PoissonParams};
 pub use priority_front::{PriorityFront, PriorityFrontParams};
 pub use ufm::{Ufm, UfmMesh, UfmMeshParams, UfmParams};

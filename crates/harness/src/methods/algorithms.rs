@@ -8,6 +8,7 @@ use reconbench_filters::{EbtThinning, GridThinning, RandomThinning};
 use reconbench_filters::{Mls, MlsSharp};
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
 use reconbench_recon::Ebt;
+use reconbench_recon::HcIt;
 use reconbench_recon::{BallPivoting, Poisson};
 use reconbench_recon::{Cocone, PriorityFront, TightCocone, Ufm, UfmMesh};
 
@@ -32,6 +33,7 @@ pub fn entries() -> Vec<MethodEntry> {
         filter::<GridThinning>(),
         reconstruct::<PriorityFront>(),
         reconstruct::<Ebt>(),
+        reconstruct::<HcIt>(),
         reconstruct::<Ufm>(),
         reconstruct::<Cocone>(),
         reconstruct::<TightCocone>(),

@@ -1,0 +1,195 @@
+//! The growing triangle mesh of all NC clusters (spec §2): triangles in stored order, an
+//! undirected edge -> triangles map, and vertex -> triangles lists. A boundary (BTM)
+//! edge is an edge with one triangle, directed as that triangle traverses it.
+//!
+//! Every insertion keeps the mesh edge-manifold and consistently oriented: a triangle
+//! whose edge already has two triangles, or is traversed in the same direction by its
+//! one triangle, is refused.
+
+use foldhash::HashMap;
+use glam::DVec3;
+
+/// No triangle.
+pub const NONE: u32 = u32::MAX;
+
+/// Key of the undirected edge {a, b}.
+#[inline]
+pub fn key(a: u32, b: u32) -> u64 {
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    (u64::from(lo) << 32) | u64::from(hi)
+}
+
+/// Unnormalized normal (v1 - v0) x (v2 - v0) of a triangle in stored order (Eq. 1).
+#[inline]
+pub fn cross(p: &[DVec3], t: [u32; 3]) -> DVec3 {
+    let a = p[t[0] as usize];
+    (p[t[1] as usize] - a).cross(p[t[2] as usize] - a)
+}
+
+/// Angle between two vectors in [0, pi] (pi/2 when one is zero).
+#[inline]
+pub fn angle(a: DVec3, b: DVec3) -> f64 {
+    let d = a.length() * b.length();
+    if d <= 0.0 {
+        return std::f64::consts::FRAC_PI_2;
+    }
+    (a.dot(b) / d).clamp(-1.0, 1.0).acos()
+}
+
+/// Smallest interior angle of a triangle (0 for a degenerate one).
+pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let ang = |p: DVec3, q: DVec3, r: DVec3| angle(q - p, r - p);
+    ang(a, b, c).min(ang(b, c, a)).min(ang(c, a, b))
+}
+
+/// Triangle whose stored order traverses a -> b, rotated to start at `a`.
+#[inline]
+pub fn rotate_to(t: [u32; 3], a: u32) -> [u32; 3] {
+    if t[0] == a {
+        t
+    } else if t[1] == a {
+        [t[1], t[2], t[0]]
+    } else {
+        [t[2], t[0], t[1]]
+    }
+}
+
+/// The mesh under construction.
+#[derive(Debug, Default)]
+pub struct Mesh {
+    /// Triangles in stored order (orientation from their NC's first triangle).
+    pub tris: Vec<[u32; 3]>,
+    edges: HashMap<u64, [u32; 2]>,
+    /// Triangles incident to each vertex.
+    pub vt: Vec<Vec<u32>>,
+}
+
+impl Mesh {
+    /// An empty mesh over `n` vertices.
+    pub fn new(n: usize) -> Self {
+        Self {
+            tris: Vec::new(),
+            edges: HashMap::default(),
+            vt: vec![Vec::new(); n],
+        }
+    }
+
+    /// The (up to two) triangles of edge {a, b}.
+    pub fn edge_tris(&self, a: u32, b: u32) -> [u32; 2] {
+        self.edges.get(&key(a, b)).copied().unwrap_or([NONE, NONE])
+    }
+
+    /// Whether the edge {a, b} exists.
+    pub fn has_edge(&self, a: u32, b: u32) -> bool {
+        self.edges.contains_key(&key(a, b))
+    }
+
+    /// The triangle across edge {a, b} from `t`, if any.
+    pub fn across(&self, t: u32, a: u32, b: u32) -> Option<u32> {
+        let [t0, t1] = self.edge_tris(a, b);
+        let o = if t0 == t { t1 } else { t0 };
+        (o != NONE && o != t).then_some(o)
+    }
+
+    /// Whether directed a -> b is a boundary edge (one triangle, traversing a -> b).
+    pub fn is_boundary(&self, a: u32, b: u32) -> bool {
+        let [t0, t1] = self.edge_tris(a, b);
+        if t0 == NONE || t1 != NONE {
+            return false;
+        }
+        let t = self.tris[t0 as usize];
+        (0..3).any(|k| t[k] == a && t[(k + 1) % 3] == b)
+    }
+
+    /// Boundary edges a -> b with `a == v` (outgoing) or `b == v` (incoming), pushed to
+    /// `out` as `(a, b, triangle)`.
+    pub fn boundary_at(&self, v: u32, out: &mut Vec<(u32, u32, u32)>) {
+        for &t in &self.vt[v as usize] {
+            let tri = self.tris[t as usize];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if (a == v || b == v) && self.edge_tris(a, b)[1] == NONE {
+                    out.push((a, b, t));
+                }
+            }
+        }
+    }
+
+    /// Whether triangle `t` can be added: distinct vertices, every edge has at most one
+    /// triangle and that one traverses it the other way.
+    pub fn can_add(&self, t: [u32; 3]) -> bool {
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            return false;
+        }
+        (0..3).all(|k| {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let [t0, t1] = self.edge_tris(a, b);
+            t0 == NONE || (t1 == NONE && self.is_boundary(b, a))
+        })
+    }
+
+    /// Adds `t` if [`Self::can_add`]; returns its id.
+    pub fn add(&mut self, t: [u32; 3]) -> Option<u32> {
+        if !self.can_add(t) {
+            return None;
+        }
+        let id = self.tris.len() as u32;
+        self.tris.push(t);
+        self.link(id, t);
+        Some(id)
+    }
+
+    fn link(&mut self, id: u32, t: [u32; 3]) {
+        for k in 0..3 {
+            let e = self
+                .edges
+                .entry(key(t[k], t[(k + 1) % 3]))
+                .or_insert([NONE, NONE]);
+            if e[0] == NONE {
+                e[0] = id;
+            } else {
+                e[1] = id;
+            }
+            self.vt[t[k] as usize].push(id);
+        }
+    }
+
+    fn unlink(&mut self, id: u32) {
+        let t = self.tris[id as usize];
+        for k in 0..3 {
+            let kk = key(t[k], t[(k + 1) % 3]);
+            if let Some(e) = self.edges.get_mut(&kk) {
+                if e[0] == id {
+                    e[0] = e[1];
+                }
+                e[1] = NONE;
+                if e[0] == NONE {
+                    self.edges.remove(&kk);
+                }
+            }
+            let l = &mut self.vt[t[k] as usize];
+            if let Some(pos) = l.iter().position(|&x| x == id) {
+                l.swap_remove(pos);
+            }
+        }
+    }
+
+    /// Replaces triangle `id` by `t` (used by splits and flips); the caller guarantees
+    /// the result is manifold.
+    pub fn replace(&mut self, id: u32, t: [u32; 3]) {
+        self.unlink(id);
+        self.tris[id as usize] = t;
+        self.link(id, t);
+    }
+
+    /// Replaces triangles `a` and `b` together (an edge flip): both are unlinked before
+    /// either is relinked, so the shared outer edges never see three triangles.
+    pub fn replace_pair(&mut self, a: u32, ta: [u32; 3], b: u32, tb: [u32; 3]) {
+        self.unlink(a);
+        self.unlink(b);
+        self.tris[a as usize] = ta;
+        self.tris[b as usize] = tb;
+        self.link(a, ta);
+        self.link(b, tb);
+    }
+}

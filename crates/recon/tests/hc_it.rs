@@ -1,0 +1,285 @@
+//! Tests of `hc-it` (spec 003): an open sheet, a closed sphere, the first-triangle
+//! orientation by k, bad input and determinism under a shuffled input order.
+
+use std::f64::consts::PI;
+
+use glam::DVec3;
+use reconbench_geom::PointCloud;
+use reconbench_geom::method::{Describe, Diagnostic, Reconstruction, Reconstructor, RunCtx};
+use reconbench_geom::topology::analyze;
+use reconbench_recon::hc_it::cluster::UnionFind;
+use reconbench_recon::hc_it::{
+    ConflictRule, EdgeDistance, HcIt, HcItParams, WinnerScan, sweep_order,
+};
+
+/// A jittered grid (deterministic, irrational offsets) over `[0, 1]^2` lifted by `f`.
+fn sheet(m: usize, f: impl Fn(f64, f64) -> f64) -> Vec<DVec3> {
+    let mut out = Vec::with_capacity(m * m);
+    for i in 0..m {
+        for j in 0..m {
+            let jx = ((i * 7 + j * 13) as f64 * 0.618_034).fract() - 0.5;
+            let jy = ((i * 11 + j * 5) as f64 * 0.414_214).fract() - 0.5;
+            let x = (i as f64 + 0.5 + 0.3 * jx) / m as f64;
+            let y = (j as f64 + 0.5 + 0.3 * jy) / m as f64;
+            out.push(DVec3::new(x, y, f(x, y)));
+        }
+    }
+    out
+}
+
+/// Golden-spiral samples of the unit sphere.
+fn sphere(n: usize) -> Vec<DVec3> {
+    let ga = PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let s = (1.0 - z * z).sqrt();
+            let phi = ga * i as f64;
+            DVec3::new(s * phi.cos(), s * phi.sin(), z)
+        })
+        .collect()
+}
+
+fn run(p: &[DVec3], params: HcItParams) -> Reconstruction {
+    let m = HcIt::from_params(params).unwrap();
+    m.reconstruct(&PointCloud::new(p.to_vec()).unwrap(), &mut RunCtx::new(1))
+        .unwrap()
+}
+
+fn num(r: &Reconstruction, k: &str) -> f64 {
+    match r.diagnostics.get(k) {
+        Some(Diagnostic::Number(x)) => *x,
+        other => panic!("diagnostic {k}: {other:?}"),
+    }
+}
+
+fn with_rho(rho: f64) -> HcItParams {
+    HcItParams {
+        rho,
+        ..Default::default()
+    }
+}
+
+fn wavy(x: f64, y: f64) -> f64 {
+    0.1 * (3.0 * x).sin() * y
+}
+
+#[test]
+fn open_sheet_gives_one_boundary_loop_and_a_manifold_mesh() {
+    let pts = sheet(30, wavy);
+    let r = run(&pts, with_rho(3.0));
+    let t = analyze(&r.mesh);
+    assert_eq!(t.n_boundary_loops(), 1, "{:?}", t.boundary_loops);
+    assert_eq!(t.components, 1);
+    assert_eq!(t.non_manifold_edges, 0);
+    assert!(t.consistently_oriented);
+    assert_eq!(num(&r, "nc_meshes"), 1.0);
+    // Measured 1533 faces and 101 unmeshed points (the sweep's first column and points
+    // that joined only through case 1); a complete grid mesh has 2 * 29^2 = 1682 faces.
+    assert!(t.faces > 1400, "{} faces", t.faces);
+    assert!(num(&r, "unmeshed") < 150.0);
+    assert_eq!(r.refused.len() as f64, num(&r, "unmeshed"));
+    // The sheet's normals agree with k = +z: the first triangle was oriented by k and
+    // the growth keeps the orientation, up to a few folded faces.
+    let up = (0..r.mesh.n_faces())
+        .filter(|&f| r.mesh.face_normal(f).z > 0.0)
+        .count();
+    // Measured: 1531 of 1533 (two faces folded by the sweep).
+    assert!(
+        up as f64 >= 0.995 * r.mesh.n_faces() as f64,
+        "{up} of {}",
+        r.mesh.n_faces()
+    );
+    // Edges much longer than rho: the literal winner search falls back to every BTM
+    // edge of the NC when none is at P's rho-neighbours, which bridges (measured: 7
+    // face-edges above 4 rho, 17 above 2 rho).
+    let rho = num(&r, "rho_abs");
+    let long = r
+        .mesh
+        .faces()
+        .iter()
+        .flat_map(|f| (0..3).map(move |k| (f[k] as usize, f[(k + 1) % 3] as usize)))
+        .filter(|&(a, b)| (pts[a] - pts[b]).length() > 4.0 * rho)
+        .count();
+    assert!(long <= 12, "{long} face-edges above 4 rho");
+}
+
+#[test]
+fn reference_vector_orients_the_sheet() {
+    let pts = sheet(12, wavy);
+    let down = HcItParams {
+        reference: [0.0, 0.0, -1.0],
+        ..with_rho(3.0)
+    };
+    let r = run(&pts, down);
+    assert!(r.mesh.n_faces() > 100);
+    for f in 0..r.mesh.n_faces() {
+        assert!(r.mesh.face_normal(f).z < 0.0, "face {f}");
+    }
+}
+
+#[test]
+fn sheet_at_rho_two_stays_manifold() {
+    for rho in [1.5, 2.0] {
+        let r = run(&sheet(30, wavy), with_rho(rho));
+        let t = analyze(&r.mesh);
+        assert_eq!(t.non_manifold_edges, 0, "rho {rho}");
+        assert_eq!(t.non_manifold_vertices, 0, "rho {rho}");
+        assert!(t.consistently_oriented, "rho {rho}");
+    }
+}
+
+#[test]
+fn closed_sphere_gives_a_nearly_closed_mesh() {
+    let pts = sphere(1500);
+    let r = run(&pts, with_rho(2.0));
+    let t = analyze(&r.mesh);
+    // Measured: 2995 faces of the 2996 = 2n - 4 of a closed triangulation, one small
+    // boundary loop, no unmeshed point.
+    assert_eq!(t.components, 1);
+    assert_eq!(t.non_manifold_edges, 0);
+    assert!(t.consistently_oriented);
+    assert!(t.faces >= 2980, "{} faces", t.faces);
+    assert!(t.n_boundary_loops() <= 2, "{:?}", t.boundary_loops);
+    let open: usize = t.boundary_loops.iter().map(|l| l.vertices).sum();
+    assert!(open <= 12, "{open} boundary vertices");
+    assert!(num(&r, "unmeshed") <= 3.0);
+    // Interpolating: every mesh vertex is an input point, unchanged.
+    assert_eq!(r.mesh.vertices(), &pts[..]);
+}
+
+#[test]
+fn literal_variants_run_and_stay_manifold() {
+    let pts = sheet(16, wavy);
+    let lit = HcItParams {
+        edge_distance: EdgeDistance::Literal,
+        winner_scan: WinnerScan::All,
+        conflict_rule: ConflictRule::Phi,
+        ear_max_edge: 0.0,
+        strict_rho: true,
+        ..with_rho(3.0)
+    };
+    let bare = HcItParams {
+        neighbourhood: false,
+        flips: false,
+        ..with_rho(3.0)
+    };
+    for p in [lit, bare] {
+        let r = run(&pts, p.clone());
+        let t = analyze(&r.mesh);
+        assert!(t.faces > 100, "{p:?}: {} faces", t.faces);
+        assert_eq!(t.non_manifold_edges, 0, "{p:?}");
+        assert!(t.consistently_oriented, "{p:?}");
+        if !p.flips {
+            assert_eq!(num(&r, "flips"), 0.0);
+            assert_eq!(num(&r, "neighbourhood_triangles"), 0.0);
+        }
+    }
+}
+
+#[test]
+fn shuffled_input_gives_the_same_mesh() {
+    let pts = sheet(20, wavy);
+    let a = run(&pts, with_rho(2.5));
+    let b = run(&pts, with_rho(2.5));
+    assert_eq!(a.mesh.faces(), b.mesh.faces());
+    assert_eq!(a.diagnostics, b.diagnostics);
+    // A fixed permutation of the input: the same triangles up to the relabelling.
+    let n = pts.len();
+    let perm: Vec<usize> = (0..n).map(|i| (i * 173 + 29) % n).collect();
+    let shuffled: Vec<DVec3> = perm.iter().map(|&i| pts[i]).collect();
+    let c = run(&shuffled, with_rho(2.5));
+    let canon = |faces: &[[u32; 3]], map: &dyn Fn(u32) -> u32| {
+        let mut v: Vec<[u32; 3]> = faces
+            .iter()
+            .map(|f| {
+                let g = f.map(map);
+                let k = (0..3).min_by_key(|&k| g[k]).unwrap();
+                [g[k], g[(k + 1) % 3], g[(k + 2) % 3]]
+            })
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let fa = canon(a.mesh.faces(), &|v| v);
+    let fc = canon(c.mesh.faces(), &|v| perm[v as usize] as u32);
+    assert_eq!(fa, fc);
+}
+
+#[test]
+fn sweep_order_breaks_ties_by_y_then_z() {
+    let p = [
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(0.0, 1.0, 1.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::new(0.0, 0.0, 5.0),
+    ];
+    assert_eq!(sweep_order(&p), [3, 2, 1, 0]);
+}
+
+#[test]
+fn union_find_merges_and_counts() {
+    let mut u = UnionFind::new(5);
+    let r = u.union(0, 1);
+    assert_eq!(u.size(r), 2);
+    let r = u.union(3, 1);
+    assert_eq!(u.size(r), 3);
+    assert_eq!(u.find(0), u.find(3));
+    assert_ne!(u.find(2), u.find(0));
+    u.shrink(r);
+    let r0 = u.find(0);
+    assert_eq!(u.size(r0), 2);
+}
+
+#[test]
+fn bad_input_is_an_error_naming_the_problem() {
+    let m = HcIt::default();
+    let mut ctx = RunCtx::new(1);
+    let err = |p: Vec<DVec3>, ctx: &mut RunCtx| {
+        m.reconstruct(&PointCloud::new(p).unwrap(), ctx)
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(err(vec![], &mut ctx).contains("at least 3"));
+    assert!(err(vec![DVec3::X, DVec3::Y], &mut ctx).contains("at least 3"));
+    let mut p = sheet(5, wavy);
+    p.push(p[3]);
+    assert!(err(p, &mut ctx).contains("coincide"));
+    if let Ok(c) = PointCloud::new(vec![DVec3::X, DVec3::Y, DVec3::new(f64::NAN, 0.0, 0.0)]) {
+        let e = m.reconstruct(&c, &mut ctx).unwrap_err().to_string();
+        assert!(e.contains("non-finite"), "{e}");
+    }
+    // Collinear points: no triangle, no panic.
+    let line: Vec<DVec3> = (0..10).map(|i| DVec3::X * i as f64).collect();
+    let r = m
+        .reconstruct(&PointCloud::new(line).unwrap(), &mut ctx)
+        .unwrap();
+    assert_eq!(r.mesh.n_faces(), 0);
+    assert_eq!(r.refused.len(), 10);
+    for (bad, name) in [
+        (
+            HcItParams {
+                rho: 0.0,
+                ..Default::default()
+            },
+            "rho",
+        ),
+        (
+            HcItParams {
+                psi_rad: PI,
+                ..Default::default()
+            },
+            "psi_rad",
+        ),
+        (
+            HcItParams {
+                reference: [0.0; 3],
+                ..Default::default()
+            },
+            "reference",
+        ),
+    ] {
+        let e = HcIt::from_params(bad).unwrap_err().to_string();
+        assert!(e.contains(name), "{e}");
+    }
+}
