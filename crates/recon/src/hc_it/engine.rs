@@ -100,6 +100,9 @@ pub fn run<'b>(
     checkpoint: &mut dyn FnMut() -> Result<(), reconbench_geom::method::MethodError>,
 ) -> Result<Outcome, reconbench_geom::method::MethodError> {
     let n = p.len();
+    // ASSUMPTION H1: SM and NC as union-find forests over point ids (plus one fresh id
+    // per point for the extra case), each NC root owning its triangle count; the meshes
+    // of all NCs live in one edge-manifold structure.
     let mut s = State {
         p,
         o,
@@ -262,6 +265,7 @@ impl State<'_> {
     /// §3.3.1 / ASSUMPTION H6: P and its two nearest NC members within rho (non-degenerate,
     /// min angle > 1 degree), oriented so the normal lies in the k half-space (Eq. 2).
     fn first_triangle(&mut self, i: u32, root: u32, lg: &[u32]) {
+        // ASSUMPTION H6: the two nearest members within rho, min angle > 1 degree.
         let mut mem = [NONE; 2];
         let mut m = 0;
         for &v in lg {
@@ -299,6 +303,7 @@ impl State<'_> {
         let (a, b) = (self.pt(x), self.pt(y));
         let (d45, e) = (pp - a, b - a);
         let d34 = e.length();
+        // ASSUMPTION H7: exact segment distance; `literal` is the paper's formula.
         match self.o.edge_distance {
             EdgeDistance::Segment => {
                 let t = (d45.dot(e) / e.length_squared()).clamp(0.0, 1.0);
@@ -422,6 +427,7 @@ impl State<'_> {
     /// against T_new, the edge cap, the edge not yet present, and no 2-D overlap (in the
     /// plane of n_new) with the triangles at the candidate's vertices.
     fn ear_ok(&self, cand: [u32; 3], a: u32, b: u32, n_new: DVec3) -> bool {
+        // ASSUMPTION H11: new edge absent, edge cap, non-fold, no local 2-D overlap.
         if self.mesh.has_edge(a, b) || !self.mesh.can_add(cand) {
             return false;
         }
@@ -537,6 +543,7 @@ impl State<'_> {
     /// flipped normals within pi/2 (the paper's phi > pi/2), a shorter diagonal, and a
     /// diagonal not yet present. Boundary edges are never flipped.
     fn flip_queue(&mut self, mut queue: VecDeque<(u32, u32)>) {
+        // ASSUMPTION H13: at most 64 flips per insertion and 10 per triangle overall.
         let mut budget = 64usize;
         while let Some((a, b)) = queue.pop_front() {
             if budget == 0 || self.flip_cap == 0 {
