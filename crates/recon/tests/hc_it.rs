@@ -283,3 +283,38 @@ fn bad_input_is_an_error_naming_the_problem() {
         assert!(e.contains(name), "{e}");
     }
 }
+
+#[test]
+fn spare_part_bolt_holes_stay_open() {
+    // A flat 40 x 40 plate with two bolt holes of radius 0.12 (spacing 0.025).
+    let holes = [(0.3, 0.5), (0.7, 0.5)];
+    let pts: Vec<DVec3> = sheet(40, |_, _| 0.0)
+        .into_iter()
+        .filter(|p| {
+            holes
+                .iter()
+                .all(|&(cx, cy)| (p.x - cx).hypot(p.y - cy) > 0.12)
+        })
+        .collect();
+    let r = run(&pts, with_rho(2.0));
+    let t = analyze(&r.mesh);
+    assert_eq!(t.non_manifold_edges, 0);
+    assert!(t.faces > 2000, "{} faces", t.faces);
+    // No triangle bridges a hole: no centroid within 0.1 of a hole centre.
+    let inside = r
+        .mesh
+        .faces()
+        .iter()
+        .filter(|f| {
+            let c = (pts[f[0] as usize] + pts[f[1] as usize] + pts[f[2] as usize]) / 3.0;
+            holes
+                .iter()
+                .any(|&(cx, cy)| (c.x - cx).hypot(c.y - cy) < 0.1)
+        })
+        .count();
+    assert_eq!(inside, 0);
+    // But the hole loops are not separate: measured 2 components with 2 boundary loops
+    // (79 and 175 vertices), the holes joined to the outer boundary by sweep cracks of
+    // unmeshed points, not the 3 loops (outer + 2 holes) of the true plate.
+    assert!(t.n_boundary_loops() < 3, "{:?}", t.boundary_loops);
+}
