@@ -318,3 +318,72 @@ fn spare_part_bolt_holes_stay_open() {
     // unmeshed points, not the 3 loops (outer + 2 holes) of the true plate.
     assert!(t.n_boundary_loops() < 3, "{:?}", t.boundary_loops);
 }
+
+#[test]
+fn slabs_and_portions() {
+    let pts = sheet(30, wavy);
+    let whole = run(&pts, with_rho(3.0));
+    // ASSUMPTION H3: slabs covering everything, one sweep: the same mesh as no slabs.
+    let swept = run(
+        &pts,
+        HcItParams {
+            slabs: vec![0.0, 0.5, 1.0],
+            ..with_rho(3.0)
+        },
+    );
+    assert_eq!(whole.mesh.faces(), swept.mesh.faces());
+    // A slab over the left half only: every point right of it is ignored.
+    let xs: Vec<f64> = pts.iter().map(|p| p.x).collect();
+    let (lo, hi) = xs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    let half = run(
+        &pts,
+        HcItParams {
+            slabs: vec![0.0, 0.5],
+            ..with_rho(3.0)
+        },
+    );
+    let cut = lo + 0.5 * (hi - lo);
+    let right = pts.iter().filter(|p| p.x > cut).count();
+    assert_eq!(num(&half, "ignored"), right as f64);
+    for f in half.mesh.faces() {
+        for &v in f {
+            assert!(pts[v as usize].x <= cut);
+        }
+    }
+    // ASSUMPTION H15: two portions meshed separately and concatenated leave the seam
+    // open: two components, more boundary, no triangle across the seam.
+    let parts = run(
+        &pts,
+        HcItParams {
+            slabs: vec![0.0, 0.5, 1.0],
+            portions: true,
+            ..with_rho(3.0)
+        },
+    );
+    let (tw, tp) = (analyze(&whole.mesh), analyze(&parts.mesh));
+    assert_eq!(tp.components, 2);
+    assert_eq!(tp.non_manifold_edges, 0);
+    assert!(tp.boundary_edges > tw.boundary_edges);
+    for f in parts.mesh.faces() {
+        let left = f.iter().filter(|&&v| pts[v as usize].x <= cut).count();
+        assert!(left == 0 || left == 3, "{f:?} crosses the seam");
+    }
+    eprintln!(
+        "seam: whole {} faces {} boundary edges {} loops; portions {} faces {} boundary edges {} loops",
+        tw.faces,
+        tw.boundary_edges,
+        tw.n_boundary_loops(),
+        tp.faces,
+        tp.boundary_edges,
+        tp.n_boundary_loops()
+    );
+    let bad = HcIt::from_params(HcItParams {
+        slabs: vec![0.5, 0.2],
+        ..Default::default()
+    });
+    assert!(bad.unwrap_err().to_string().contains("slabs"));
+}

@@ -61,6 +61,20 @@ pub struct Stats {
     pub no_winner: usize,
 }
 
+impl Stats {
+    /// Adds another run's counters (portions, H15).
+    pub fn add(&mut self, o: &Stats) {
+        self.first_triangles += o.first_triangles;
+        self.created += o.created;
+        self.splits += o.splits;
+        self.extra_cases += o.extra_cases;
+        self.neighbourhood += o.neighbourhood;
+        self.flips += o.flips;
+        self.refused += o.refused;
+        self.no_winner += o.no_winner;
+    }
+}
+
 /// Result of [`run`].
 #[derive(Debug)]
 pub struct Outcome {

@@ -65,6 +65,28 @@ pub fn sweep_order(pts: &[DVec3]) -> Vec<u32> {
     order
 }
 
+/// Slab of each point (in sweep order), or -1 outside every slab (paper O2-O3).
+fn slab_ids(sorted: &[DVec3], planes: &[f64]) -> Vec<i32> {
+    if planes.len() < 2 {
+        return vec![0; sorted.len()];
+    }
+    let (x0, x1) = (sorted[0].x, sorted[sorted.len() - 1].x);
+    let ext = x1 - x0;
+    sorted
+        .iter()
+        .map(|p| {
+            let f = if ext > 0.0 { (p.x - x0) / ext } else { 0.0 };
+            if f == planes[0] {
+                return 0;
+            }
+            planes
+                .windows(2)
+                .position(|w| w[0] < f && f <= w[1])
+                .map_or(-1, |k| k as i32)
+        })
+        .collect()
+}
+
 fn check_input(pts: &[DVec3], order: &[u32]) -> Result<(), MethodError> {
     if pts.len() < 3 {
         return Err(MethodError::InvalidInput(format!(
@@ -113,6 +135,7 @@ impl Reconstructor for HcIt {
         let sorted: Vec<DVec3> = order.iter().map(|&i| pts[i as usize]).collect();
         // ASSUMPTION H2: a spatial index gives the same Lg sets as the paper's all-pairs
         // distances: the points strictly within rho (strict <) processed before P.
+        let slab = slab_ids(&sorted, &p.slabs);
         let (offs, idx) = {
             let _g = ctx.phase_guard("neighbours");
             let index = PointIndex::new(&sorted)?;
@@ -123,7 +146,9 @@ impl Reconstructor for HcIt {
             let r2 = rho * rho;
             for i in 0..pts.len() {
                 for (&j, &d2) in table.indices(i).iter().zip(table.dist2(i)) {
-                    if d2 < r2 && (j as usize) < i {
+                    let (si, sj) = (slab[i], slab[j as usize]);
+                    let same = !p.portions || si == sj;
+                    if d2 < r2 && (j as usize) < i && si >= 0 && sj >= 0 && same {
                         idx.push(j);
                     }
                 }
@@ -154,8 +179,41 @@ impl Reconstructor for HcIt {
             let _g = ctx.phase_guard("triangulate");
             let c = &*ctx;
             let nbrs = |i: u32| &idx[offs[i as usize]..offs[i as usize + 1]];
-            let ranks: Vec<u32> = (0..pts.len() as u32).collect();
-            let mut out = engine::run(&sorted, &ranks, nbrs, &opts, &mut || c.checkpoint())?;
+            let n_slabs = p.slabs.len().saturating_sub(1).max(1);
+            let runs: Vec<Vec<u32>> = if p.portions {
+                (0..n_slabs as i32)
+                    .map(|k| {
+                        (0..pts.len() as u32)
+                            .filter(|&r| slab[r as usize] == k)
+                            .collect()
+                    })
+                    .collect()
+            } else {
+                vec![
+                    (0..pts.len() as u32)
+                        .filter(|&r| slab[r as usize] >= 0)
+                        .collect(),
+                ]
+            };
+            let mut out: Option<engine::Outcome> = None;
+            for ranks in &runs {
+                let o = engine::run(&sorted, ranks, nbrs, &opts, &mut || c.checkpoint())?;
+                out = Some(match out {
+                    None => o,
+                    // ASSUMPTION H15: concatenate the portions' meshes; they share no
+                    // vertex (each point is in one slab), so seams stay open.
+                    Some(mut acc) => {
+                        for &r in ranks {
+                            acc.nc[r as usize] = o.nc[r as usize];
+                            acc.sm[r as usize] = o.sm[r as usize];
+                        }
+                        acc.tris.extend(o.tris);
+                        acc.stats.add(&o.stats);
+                        acc
+                    }
+                });
+            }
+            let mut out = out.expect("at least one run");
             // Back to input indices.
             for t in &mut out.tris {
                 *t = t.map(|v| order[v as usize]);
@@ -210,6 +268,7 @@ impl Reconstructor for HcIt {
         num("flips", s.flips as f64);
         num("refused_triangles", s.refused as f64);
         num("no_winner", s.no_winner as f64);
+        num("ignored", slab.iter().filter(|&&k| k < 0).count() as f64);
         let mesh = TriMesh::new(pts.to_vec(), out.tris)?;
         Ok(Reconstruction {
             mesh,

@@ -67,6 +67,15 @@ pub struct HcItParams {
     pub conflict_rule: ConflictRule,
     /// Shortest-diagonal flips of paper §3.4 (ASSUMPTION H13).
     pub flips: bool,
+    /// Slab planes along x as fractions of the x-extent, ascending in [0, 1]; the slabs
+    /// are the intervals between consecutive planes (the first closed below, the rest
+    /// open below, paper O2-O3) and points outside every slab are ignored. Empty = one
+    /// slab over everything.
+    pub slabs: Vec<f64>,
+    /// ASSUMPTION H15: mesh every slab separately (fresh clustering and mesh state) and
+    /// concatenate, as the paper's example 9; off = ASSUMPTION H3, one sweep whose state
+    /// carries over from slab to slab.
+    pub portions: bool,
 }
 
 impl Default for HcItParams {
@@ -83,6 +92,8 @@ impl Default for HcItParams {
             ear_max_edge: 1.0,
             conflict_rule: ConflictRule::Wedge,
             flips: true,
+            slabs: Vec::new(),
+            portions: false,
         }
     }
 }
@@ -124,6 +135,23 @@ impl HcItParams {
             return Err(bad(
                 "ear_max_edge",
                 format!("must be >= 0, got {}", self.ear_max_edge),
+            ));
+        }
+        if self.slabs.len() == 1 {
+            return Err(bad("slabs", "needs at least two planes (or none)".into()));
+        }
+        for w in self.slabs.windows(2) {
+            if w[0] >= w[1] || w[0].is_nan() || w[1].is_nan() {
+                return Err(bad(
+                    "slabs",
+                    format!("planes must ascend strictly, got {:?}", self.slabs),
+                ));
+            }
+        }
+        if self.slabs.iter().any(|x| !(0.0..=1.0).contains(x)) {
+            return Err(bad(
+                "slabs",
+                format!("planes must lie in [0, 1], got {:?}", self.slabs),
             ));
         }
         Ok(())
@@ -186,5 +214,15 @@ pub const HC_IT_DOCS: &[ParamDoc] = &[
         "flips",
         Unit::Flag,
         "ASSUMPTION H13: shortest-diagonal flips (self-adjustable connectivity, §3.4)",
+    ),
+    ParamDoc::new(
+        "slabs",
+        Unit::Fraction,
+        "slab planes along x (fractions of the x-extent, ascending); outside points ignored",
+    ),
+    ParamDoc::new(
+        "portions",
+        Unit::Flag,
+        "ASSUMPTION H15: mesh each slab separately and concatenate (paper example 9)",
     ),
 ];
