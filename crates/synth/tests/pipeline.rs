@@ -274,7 +274,14 @@ fn scanner_works_on_every_shape_and_on_meshes() {
                 shape.distance(*p)
             );
         }
-        assert_eq!(gt.scan_ids.as_ref().unwrap().iter().max(), Some(&3));
+        // Every view sees a closed shape; an open sheet (the thin twisted blade) can be
+        // edge-on to one of the four views.
+        let views = gt.scan_ids.as_ref().unwrap().iter().max().copied();
+        if shape.info().closed {
+            assert_eq!(views, Some(3), "{}: every view sees the shape", d.name);
+        } else {
+            assert!(views >= Some(2), "{}: {views:?}", d.name);
+        }
     }
     let torus = from_spec("torus").unwrap();
     let mesh = MeshShape::new("torus-mesh", torus.reference_mesh(48)).unwrap();
