@@ -434,16 +434,19 @@ impl Delaunay {
     }
 
     /// Number of vertices (distinct input points).
+    #[inline]
     pub fn n_vertices(&self) -> usize {
         self.points.len()
     }
 
     /// Position of vertex `v`.
+    #[inline]
     pub fn vertex(&self, v: u32) -> DVec3 {
         self.points[v as usize]
     }
 
     /// Positions of all vertices, indexed by vertex id.
+    #[inline]
     pub fn vertices(&self) -> &[DVec3] {
         &self.points
     }
@@ -459,6 +462,7 @@ impl Delaunay {
     }
 
     /// Input index of vertex `v` (the first occurrence of its position).
+    #[inline]
     pub fn input_of_vertex(&self, v: u32) -> u32 {
         self.input_of_vertex[v as usize]
     }
@@ -470,31 +474,37 @@ impl Delaunay {
     }
 
     /// Number of finite tetrahedra.
+    #[inline]
     pub fn n_tets(&self) -> usize {
         self.n_finite
     }
 
     /// Number of tetrahedra including the infinite ones (one per hull facet).
+    #[inline]
     pub fn n_all_tets(&self) -> usize {
         self.tets.len()
     }
 
     /// Whether `t` is an infinite tetrahedron (`t >= n_tets()`).
+    #[inline]
     pub fn is_infinite(&self, t: u32) -> bool {
         t as usize >= self.n_finite
     }
 
     /// Vertices of tetrahedron `t` ([`INFINITE`] for the infinite vertex).
+    #[inline]
     pub fn tet_vertices(&self, t: u32) -> [u32; 4] {
         self.tets[t as usize].v
     }
 
     /// Neighbours of tetrahedron `t`; neighbour `i` shares the face opposite vertex `i`.
+    #[inline]
     pub fn tet_neighbors(&self, t: u32) -> [u32; 4] {
         self.tets[t as usize].n.map(|c| c >> 2)
     }
 
     /// Index of the face of neighbour `tet_neighbors(t)[i]` that is face `i` of `t`.
+    #[inline]
     pub fn mirror_face(&self, t: u32, i: usize) -> usize {
         (self.tets[t as usize].n[i] & 3) as usize
     }

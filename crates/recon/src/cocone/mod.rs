@@ -377,11 +377,13 @@ impl Reconstructor for TightCocone {
         };
         let mut inside = tight::label(&dt, &poles, &surface, &good, &mut stats);
         drop(g);
-        // ASSUMPTION K-07 (deviation): the interface is made manifold by relabelling.
-        let (rep, pockets) = ctx.phase("repair", || {
-            // ASSUMPTION K-08 (deviation): small pockets are relabelled first.
-            let pockets = repair::drop_pockets(&dt, &mut inside, p.pocket_share);
-            (repair::repair(&dt, &mut inside, p.repair_rounds), pockets)
+        // ASSUMPTION K-08 (deviation): small pockets are relabelled first.
+        let pockets = ctx.phase("pockets", || {
+            repair::drop_pockets(&dt, &mut inside, p.pocket_share)
+        });
+        // ASSUMPTION K-07 (deviation): then non-manifold spots.
+        let rep = ctx.phase("repair", || {
+            repair::repair(&dt, &mut inside, p.repair_rounds)
         });
         num(&mut d, "pocket_tets", pockets as f64);
         let tris = tight::interface(&dt, &inside);

@@ -212,39 +212,47 @@ pub fn defects(nv: usize, tris: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
 /// relabelled.
 pub fn drop_pockets(dt: &Delaunay, inside: &mut [bool], share: f64) -> usize {
     let nt = dt.n_tets();
+    let nall = dt.n_all_tets();
     let total_in = inside[..nt].iter().filter(|&&x| x).count();
     let limit = (share * total_in as f64).floor() as usize;
     if limit == 0 {
         return 0;
     }
-    let mut seen = vec![false; dt.n_all_tets()];
-    let mut stack = Vec::new();
-    let mut members = Vec::new();
-    let mut flipped = 0;
-    for s in 0..dt.n_all_tets() {
-        if seen[s] {
-            continue;
+    // Union-find over same-label face neighbours, one pass in tetrahedron order (the
+    // tetrahedra are read in sequence, only the small parent array is read at random).
+    let mut parent: Vec<u32> = (0..nall as u32).collect();
+    fn root(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            let up = parent[parent[x as usize] as usize];
+            parent[x as usize] = up;
+            x = up;
         }
-        let lab = inside[s];
-        seen[s] = true;
-        stack.push(s as u32);
-        members.clear();
-        let mut has_ghost = false;
-        while let Some(t) = stack.pop() {
-            members.push(t);
-            has_ghost |= t as usize >= nt;
-            for n in dt.tet_neighbors(t) {
-                if !seen[n as usize] && inside[n as usize] == lab {
-                    seen[n as usize] = true;
-                    stack.push(n);
+        x
+    }
+    for t in 0..nall as u32 {
+        for n in dt.tet_neighbors(t) {
+            if n > t && inside[n as usize] == inside[t as usize] {
+                let (a, b) = (root(&mut parent, t), root(&mut parent, n));
+                if a != b {
+                    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+                    parent[hi as usize] = lo;
                 }
             }
         }
-        if !has_ghost && members.len() < limit {
-            for &t in &members {
-                inside[t as usize] = !lab;
-            }
-            flipped += members.len();
+    }
+    let mut size = vec![0u32; nall];
+    let mut ghost = vec![false; nall];
+    for t in 0..nall as u32 {
+        let r = root(&mut parent, t) as usize;
+        size[r] += 1;
+        ghost[r] |= t as usize >= nt;
+    }
+    let mut flipped = 0;
+    for t in 0..nt {
+        let r = root(&mut parent, t as u32) as usize;
+        if !ghost[r] && (size[r] as usize) < limit {
+            inside[t] = !inside[t];
+            flipped += 1;
         }
     }
     flipped
