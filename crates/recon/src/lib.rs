@@ -23,6 +23,7 @@
 
 pub mod ball_pivoting;
 pub mod cocone;
+mod diag;
 pub mod ebt;
 pub mod hc_it;
 pub mod poisson;

@@ -34,6 +34,7 @@ use reconbench_geom::{PointCloud, TriMesh};
 
 pub use params::{BallPivotingParams, PARAM_DOCS};
 
+use crate::diag::num;
 use mesher::{Mesher, count_loops};
 
 /// Registry name.
@@ -66,10 +67,6 @@ impl Describe for BallPivoting {
     fn from_params(params: BallPivotingParams) -> Result<Self, MethodError> {
         Self::new(params)
     }
-}
-
-fn num(d: &mut Diagnostics, k: &str, v: f64) {
-    d.insert(k.to_string(), Diagnostic::Number(v));
 }
 
 impl Reconstructor for BallPivoting {

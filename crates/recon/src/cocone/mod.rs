@@ -18,6 +18,7 @@ pub mod poles;
 pub mod repair;
 pub mod tight;
 
+use crate::diag::num;
 use reconbench_delaunay::{Delaunay, DelaunayError};
 use reconbench_geom::method::{
     Describe, Diagnostic, Diagnostics, MethodError, ParamDoc, Reconstruction, Reconstructor,
@@ -187,10 +188,6 @@ impl Describe for TightCocone {
     }
 }
 
-fn num(d: &mut Diagnostics, k: &str, v: f64) {
-    d.insert(k.to_string(), Diagnostic::Number(v));
-}
-
 /// The Delaunay tetrahedralization of the cloud, with input errors named.
 fn triangulate(name: &str, cloud: &PointCloud, ctx: &RunCtx) -> Result<Delaunay, MethodError> {
     let input = cloud.positions();
@@ -244,6 +241,32 @@ fn cocone_surface(
         .collect())
 }
 
+/// Oriented Cocone triangles (Delaunay vertex ids) with their Delaunay facet ids.
+type Surface = Vec<(u32, [u32; 3])>;
+
+/// The steps both methods share: the Delaunay, the poles and the Cocone surface, with
+/// the record of the shared ASSUMPTIONs in `d`.
+fn delaunay_and_surface(
+    name: &str,
+    cloud: &PointCloud,
+    (theta_deg, sharp_deg, dangling): (f64, f64, bool),
+    ctx: &RunCtx,
+    d: &mut Diagnostics,
+) -> Result<(Delaunay, poles::Poles, Surface), MethodError> {
+    check_angles(theta_deg, sharp_deg)?;
+    let dt = triangulate(name, cloud, ctx)?;
+    ctx.checkpoint()?;
+    let poles = ctx.phase("poles", || poles::Poles::new(&dt));
+    let tris = cocone_surface(&dt, &poles, theta_deg, sharp_deg, dangling, ctx, d)?;
+    d.insert(
+        "assumptions".into(),
+        Diagnostic::Text(format!(
+            "K-01=farthest-voronoi-vertex,hull:mean-normal K-02=dangling-sharp:{dangling} K-03=hull-seed K-04=exact-segment-cone"
+        )),
+    );
+    Ok((dt, poles, tris))
+}
+
 /// The output mesh on the input points, with the topology diagnostics.
 fn finish(
     cloud: &PointCloud,
@@ -281,12 +304,7 @@ fn finish(
     );
     num(&mut d, "duplicates", refused.len() as f64);
     num(&mut d, "delaunay_triangles", dt.facets().len() as f64);
-    num(&mut d, "pinched_vertices", rep.non_manifold_vertices as f64);
-    num(&mut d, "non_manifold_edges", rep.non_manifold_edges as f64);
-    num(&mut d, "boundary_edges", rep.boundary_edges as f64);
-    num(&mut d, "boundary_loops", rep.n_boundary_loops() as f64);
-    num(&mut d, "components", rep.components as f64);
-    num(&mut d, "watertight", rep.watertight as u8 as f64);
+    crate::diag::topology(&mut d, &rep);
     Ok(Reconstruction {
         mesh,
         refused,
@@ -305,28 +323,15 @@ impl Reconstructor for Cocone {
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
         let p = &self.params;
-        check_angles(p.theta_deg, p.sharp_deg)?;
-        let dt = triangulate(Self::NAME, cloud, ctx)?;
-        ctx.checkpoint()?;
-        let poles = ctx.phase("poles", || poles::Poles::new(&dt));
         let mut d = Diagnostics::new();
-        let tris = cocone_surface(
-            &dt,
-            &poles,
-            p.theta_deg,
-            p.sharp_deg,
-            p.prune_dangling,
+        let (dt, _, tris) = delaunay_and_surface(
+            Self::NAME,
+            cloud,
+            (p.theta_deg, p.sharp_deg, p.prune_dangling),
             ctx,
             &mut d,
         )?;
         let tris: Vec<[u32; 3]> = tris.into_iter().map(|(_, t)| t).collect();
-        d.insert(
-            "assumptions".into(),
-            Diagnostic::Text(format!(
-                "K-01=farthest-voronoi-vertex,hull:mean-normal K-02=dangling-sharp:{} K-03=hull-seed K-04=exact-segment-cone",
-                p.prune_dangling
-            )),
-        );
         finish(cloud, &dt, &tris, d, ctx)
     }
 }
@@ -342,17 +347,11 @@ impl Reconstructor for TightCocone {
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
         let p = &self.params;
-        check_angles(p.theta_deg, p.sharp_deg)?;
-        let dt = triangulate(Self::NAME, cloud, ctx)?;
-        ctx.checkpoint()?;
-        let poles = ctx.phase("poles", || poles::Poles::new(&dt));
         let mut d = Diagnostics::new();
-        let initial = cocone_surface(
-            &dt,
-            &poles,
-            p.theta_deg,
-            p.sharp_deg,
-            p.prune_dangling,
+        let (dt, poles, initial) = delaunay_and_surface(
+            Self::NAME,
+            cloud,
+            (p.theta_deg, p.sharp_deg, p.prune_dangling),
             ctx,
             &mut d,
         )?;
@@ -382,11 +381,10 @@ impl Reconstructor for TightCocone {
             repair::drop_pockets(&dt, &mut inside, p.pocket_share)
         });
         // ASSUMPTION K-07 (deviation): then non-manifold spots.
-        let rep = ctx.phase("repair", || {
+        let (rep, tris) = ctx.phase("repair", || {
             repair::repair(&dt, &mut inside, p.repair_rounds)
         });
         num(&mut d, "pocket_tets", pockets as f64);
-        let tris = tight::interface(&dt, &inside);
         num(&mut d, "repair_rounds", rep.rounds as f64);
         num(&mut d, "repair_flipped_tets", rep.flipped as f64);
         num(&mut d, "initial_triangles", initial.len() as f64);
@@ -398,13 +396,12 @@ impl Reconstructor for TightCocone {
         );
         num(&mut d, "inside_tets", stats.inside as f64);
         num(&mut d, "ball_tests", stats.ball_tests as f64);
-        d.insert(
-            "assumptions".into(),
-            Diagnostic::Text(format!(
-                "K-01=farthest-voronoi-vertex,hull:mean-normal K-02=dangling-sharp:{} K-03=hull-seed K-04=exact-segment-cone K-05=surface:{:?} K-06=certain-first,ball-angle K-07=repair:{} K-08=pockets:{}",
-                p.prune_dangling, p.surface, p.repair_rounds, p.pocket_share
-            )),
-        );
+        if let Some(Diagnostic::Text(a)) = d.get_mut("assumptions") {
+            a.push_str(&format!(
+                " K-05=surface:{:?} K-06=certain-first,ball-angle K-07=repair:{} K-08=pockets:{}",
+                p.surface, p.repair_rounds, p.pocket_share
+            ));
+        }
         finish(cloud, &dt, &tris, d, ctx)
     }
 }

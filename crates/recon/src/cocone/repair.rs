@@ -96,20 +96,28 @@ fn groups(dt: &Delaunay, set: &[u32], keep: &[u32], inside: &[bool]) -> Vec<(boo
     out
 }
 
-/// Relabels until the interface is a 2-manifold or `max_rounds` pass.
-pub fn repair(dt: &Delaunay, inside: &mut [bool], max_rounds: usize) -> RepairStats {
+/// Relabels until the interface is a 2-manifold or `max_rounds` pass; returns the
+/// counts and the final interface (see [`interface`]).
+pub fn repair(
+    dt: &Delaunay,
+    inside: &mut [bool],
+    max_rounds: usize,
+) -> (RepairStats, Vec<[u32; 3]>) {
     let nt = dt.n_tets() as u32;
     let mut stars: Option<Stars> = None;
     let mut st = RepairStats::default();
     let mut edge_set = Vec::new();
-    for round in 0..=max_rounds {
-        let tris = interface(dt, inside);
+    let mut tris;
+    let mut round = 0;
+    loop {
+        tris = interface(dt, inside);
         let (bad_edges, bad_vertices) = defects(dt.n_vertices(), &tris);
         st.edges_left = bad_edges.len();
         st.vertices_left = bad_vertices.len();
         if round == max_rounds || (bad_edges.is_empty() && bad_vertices.is_empty()) {
             break;
         }
+        round += 1;
         st.rounds += 1;
         let stars = stars.get_or_insert_with(|| Stars::new(dt));
         let mut touched = vec![false; inside.len()];
@@ -158,7 +166,7 @@ pub fn repair(dt: &Delaunay, inside: &mut [bool], max_rounds: usize) -> RepairSt
         }
         st.flipped += flips.len();
     }
-    st
+    (st, tris)
 }
 
 fn smallest_flippable(g: &[(bool, Vec<u32>)], nt: u32) -> Option<&(bool, Vec<u32>)> {

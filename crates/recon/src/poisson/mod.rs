@@ -27,8 +27,8 @@ pub mod params;
 
 use glam::DVec3;
 use reconbench_geom::method::{
-    Describe, Diagnostic, Diagnostics, INTERPOLATING_DIAGNOSTIC, MethodError, Needs, ParamDoc,
-    Reconstruction, Reconstructor, RunCtx,
+    Describe, Diagnostics, INTERPOLATING_DIAGNOSTIC, MethodError, Needs, ParamDoc, Reconstruction,
+    Reconstructor, RunCtx,
 };
 use reconbench_geom::{PointCloud, TriMesh};
 use threecrate_core::NormalPoint3f;
@@ -37,6 +37,7 @@ use threecrate_reconstruction::{PoissonConfig, poisson_reconstruction};
 pub use params::{PARAM_DOCS, PoissonParams};
 
 use crate::ball_pivoting::input;
+use crate::diag::num;
 
 /// Registry name.
 pub const NAME: &str = "poisson";
@@ -68,10 +69,6 @@ impl Describe for Poisson {
     fn from_params(params: PoissonParams) -> Result<Self, MethodError> {
         Self::new(params)
     }
-}
-
-fn num(d: &mut Diagnostics, k: &str, v: f64) {
-    d.insert(k.to_string(), Diagnostic::Number(v));
 }
 
 impl Reconstructor for Poisson {

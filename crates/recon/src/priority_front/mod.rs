@@ -44,6 +44,7 @@ use reconbench_geom::{PointCloud, TriMesh};
 
 pub use params::{PARAM_DOCS, PriorityFrontParams, RhoSample, ScoreDistance};
 
+use crate::diag::num;
 use density::{duplicates, mean_nn, search_grid};
 use grid::Grid;
 use mesher::{Cfg, FREE, Mesher, REFUSED, Stats};
@@ -70,10 +71,6 @@ impl PriorityFront {
 /// Records `name` as a phase that started at `t0` (for phases that need `ctx` inside).
 fn end_phase(ctx: &mut RunCtx, name: &str, t0: Instant) {
     ctx.record_phase(name, t0.elapsed().as_secs_f64());
-}
-
-fn num(d: &mut Diagnostics, k: &str, v: f64) {
-    d.insert(k.to_string(), Diagnostic::Number(v));
 }
 
 /// The whole-run result before conversion to input indices.

@@ -32,6 +32,7 @@ pub mod umbrella;
 
 use std::time::Instant;
 
+use crate::diag::num;
 use glam::DVec3;
 use reconbench_delaunay::{Delaunay, DelaunayError};
 use reconbench_geom::method::{
@@ -63,10 +64,6 @@ impl Ufm {
         params.validate()?;
         Ok(Self { params })
     }
-}
-
-fn num(d: &mut Diagnostics, k: &str, v: f64) {
-    d.insert(k.to_string(), Diagnostic::Number(v));
 }
 
 /// Step 1: the Delaunay triangulation (ASSUMPTION A-01: exact duplicates merged by the
@@ -334,12 +331,7 @@ impl Reconstructor for Ufm {
                 );
             }
         }
-        num(&mut d, "pinched_vertices", rep.non_manifold_vertices as f64);
-        num(&mut d, "non_manifold_edges", rep.non_manifold_edges as f64);
-        num(&mut d, "boundary_edges", rep.boundary_edges as f64);
-        num(&mut d, "boundary_loops", rep.n_boundary_loops() as f64);
-        num(&mut d, "components", rep.components as f64);
-        num(&mut d, "watertight", rep.watertight as u8 as f64);
+        crate::diag::topology(&mut d, &rep);
         num(&mut d, "dt_s", dt_s);
         num(&mut d, "ufm_s", t_start.elapsed().as_secs_f64() - dt_s);
         d.insert("assumptions".into(), Diagnostic::Text(assumption_flags(p)));
