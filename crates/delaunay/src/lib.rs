@@ -43,6 +43,7 @@ mod exact_int;
 mod point;
 mod predicates;
 mod queries;
+mod scale;
 mod sort;
 mod validate;
 
@@ -98,7 +99,30 @@ pub enum DelaunayError {
         /// Input index of the first offending point.
         index: usize,
     },
+    /// The coordinates' binary span (from the lowest set bit of the finest non-zero
+    /// coordinate to the magnitude of the largest) is wider than [`MAX_SPAN_BITS`], so no
+    /// exact power-of-two rescaling brings them into the range where the exact
+    /// predicates cannot underflow or overflow.
+    #[error(
+        "coordinates span {bits} bits (from 2^{lowest} to 2^{highest}), more than the \
+         {MAX_SPAN_BITS} the exact predicates can hold after rescaling"
+    )]
+    SpanTooWide {
+        /// `highest - lowest`.
+        bits: i32,
+        /// Exponent of the lowest set bit over the non-zero coordinates.
+        lowest: i32,
+        /// Smallest `e` with every `|coordinate| < 2^e`.
+        highest: i32,
+    },
 }
+
+/// Widest binary span of the coordinates (lowest set bit of the finest non-zero
+/// coordinate to the magnitude of the largest) that the construction accepts: any cloud
+/// within it is rescaled exactly by a power of two into the predicates' safe window
+/// (see `docs/methods/delaunay.md`, Scale). Clouds of ordinary doubles span 53 bits plus
+/// the binary orders of magnitude between their largest and smallest non-zero coordinate.
+pub const MAX_SPAN_BITS: i32 = scale::MAX_SPAN_BITS;
 
 /// Construction options.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -197,6 +221,9 @@ impl Csr {
 #[derive(Clone)]
 pub struct Delaunay {
     points: Vec<DVec3>,
+    /// The vertices multiplied by the construction's power of two (see `scale.rs`), which
+    /// every predicate reads; empty when the factor is 1 (then `points` serve).
+    scaled: Vec<P3>,
     /// Symbolic perturbation rank of each vertex (its insertion index).
     rank: Vec<u32>,
     vertex_of_input: Vec<u32>,
@@ -239,7 +266,8 @@ impl Delaunay {
             });
         }
         let n = points.len();
-        let input: Vec<P3> = normalized(points);
+        let s = scale::scale_exponent(points)?;
+        let input: Vec<P3> = scale::scaled(points, s);
         let order: Vec<u32> = if opts.spatial_sort {
             sort::brio_order(&input, opts.seed)
         } else {
@@ -275,6 +303,13 @@ impl Delaunay {
 
         let t2 = Instant::now();
         let mut dt = Self::finalize(points, &ins, &dup_of, b);
+        if s != 0 {
+            dt.scaled = dt
+                .input_of_vertex
+                .iter()
+                .map(|&i| input[i as usize])
+                .collect();
+        }
         dt.stats.sort_s = sort_s;
         dt.stats.insert_s = insert_s;
         dt.stats.finalize_s = t2.elapsed().as_secs_f64();
@@ -420,6 +455,7 @@ impl Delaunay {
         };
         Delaunay {
             points: pts,
+            scaled: Vec::new(),
             rank,
             vertex_of_input,
             input_of_vertex,
@@ -519,38 +555,14 @@ impl Delaunay {
         &self.stats
     }
 
+    /// Coordinates of vertex `v` as the predicates see them (rescaled exactly).
     #[inline]
     pub(crate) fn p(&self, v: u32) -> &P3 {
-        self.points[v as usize].as_ref()
-    }
-}
-
-/// The coordinates as arrays, scaled by a power of two (exact, so every predicate keeps
-/// its sign) when their magnitude would risk overflow or underflow in the predicates
-/// (largest |coordinate| beyond 2^±100) and the scaling loses no bit.
-fn normalized(points: &[DVec3]) -> Vec<P3> {
-    let mut pts: Vec<P3> = points.iter().map(|p| p.to_array()).collect();
-    let m = pts
-        .iter()
-        .flat_map(|p| p.iter())
-        .fold(0.0f64, |m, &x| m.max(x.abs()));
-    if m == 0.0 || (m > 2f64.powi(-100) && m < 2f64.powi(100)) {
-        return pts;
-    }
-    let e = m.log2().round() as i32;
-    let s = 2f64.powi(-e);
-    let lossless = pts.iter().flat_map(|p| p.iter()).all(|&x| {
-        let y = x * s;
-        y.is_finite() && (y == 0.0) == (x == 0.0) && y / s == x && (y == 0.0 || y.is_normal())
-    });
-    if lossless {
-        for p in &mut pts {
-            for x in p.iter_mut() {
-                *x *= s;
-            }
+        match self.scaled.get(v as usize) {
+            Some(q) => q,
+            None => self.points[v as usize].as_ref(),
         }
     }
-    pts
 }
 
 /// Positions in `order` of four affinely independent points, or the reason there are none.

@@ -45,9 +45,9 @@ impl Delaunay {
     /// * Euler relations: `V − E + F − T = 1` for the tetrahedralization (a 3-ball) and
     ///   `V − E + F = 2` for its convex-hull surface.
     ///
-    /// The geometric checks use the vertex coordinates as given, so they are exact while
-    /// the predicates cannot overflow or underflow (coordinates within about `1e±60`;
-    /// the construction itself rescales more extreme inputs by a power of two).
+    /// The geometric checks read the coordinates the construction rescaled exactly by a
+    /// power of two into the predicates' safe window, so they are exact at any scale the
+    /// construction accepts.
     /// Cost: a few seconds per million points (parallel).
     pub fn validate(&self) -> Result<(), String> {
         let nv = self.n_vertices() as u32;
