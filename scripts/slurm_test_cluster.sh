@@ -47,8 +47,15 @@ install_packages() {
     [[ $(id -u) == 0 ]] || die "Slurm is not installed; run as root to install it"
     log "installing slurmctld slurmd slurm-client munge (Debian packages)"
     export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq >/dev/null
-    apt-get install -y -qq --no-install-recommends slurmctld slurmd slurm-client munge >/dev/null
+    local out
+    out="$(mktemp)"
+    if ! { apt-get update -qq && apt-get install -y -qq --no-install-recommends \
+        slurmctld slurmd slurm-client munge; } >"$out" 2>&1; then
+        cat "$out" >&2
+        rm -f "$out"
+        die "installing the Slurm packages failed (apt-get output above)"
+    fi
+    rm -f "$out"
 }
 
 # Node memory in MiB: what the machine has less 1 GiB for the system.
