@@ -153,8 +153,19 @@ impl CurveSet {
     }
 
     /// Length samples of the curves: midpoints of pieces of length `<= step`, each with
-    /// its length as weight.
-    pub fn length_samples(&self, step: f64) -> Vec<(DVec3, f64)> {
+    /// its length as weight. Refused (before allocating) when that would take more than
+    /// [`MAX_LENGTH_SAMPLES`] samples, or `step` is not a positive finite length: a step
+    /// tiny against the curves means the cloud and the reference are not at one scale.
+    pub fn length_samples(&self, step: f64) -> Result<Vec<(DVec3, f64)>> {
+        let needed = self.length() / step + self.n_segments() as f64;
+        if !(step > 0.0 && step.is_finite() && needed <= MAX_LENGTH_SAMPLES as f64) {
+            return Err(MetricsError::InvalidInput(format!(
+                "feature curves of total length {:e} sampled every {step:e} would need {needed:e} \
+                 samples (at most {MAX_LENGTH_SAMPLES}); are the cloud and the reference at \
+                 the same scale?",
+                self.length()
+            )));
+        }
         let mut out = Vec::new();
         for p in &self.polylines {
             for w in p.windows(2) {
@@ -169,9 +180,13 @@ impl CurveSet {
                 }
             }
         }
-        out
+        Ok(out)
     }
 }
+
+/// Most length samples [`CurveSet::length_samples`] takes (32 bytes each: 128 MiB). A
+/// cloud of a million points on a unit-diagonal shape needs about 10^4.
+pub const MAX_LENGTH_SAMPLES: usize = 4_000_000;
 
 /// Result of [`eval_features`].
 #[derive(Debug, Clone, PartialEq)]
@@ -328,7 +343,7 @@ pub fn eval_features(
         )
     };
 
-    let samples = set.length_samples(spacing / 2.0);
+    let samples = set.length_samples(spacing / 2.0)?;
     let coverage = if samples.is_empty() {
         f64::NAN
     } else if det_idx.is_empty() {
@@ -527,7 +542,7 @@ pub fn eval_mesh_features(
     let sharp_set =
         CurveSet::from_parts(sharp.iter().map(|&(a, b, _)| (a, b)).collect(), Vec::new());
 
-    let samples = set.length_samples(radius / 2.0);
+    let samples = set.length_samples(radius / 2.0)?;
     let recovery = if samples.is_empty() {
         f64::NAN
     } else {
