@@ -222,11 +222,83 @@ impl PointCloud {
         self.positions = positions;
         Ok(self)
     }
+
+    /// This cloud moved exactly to the working scale and the exponent `s` it was
+    /// multiplied by (`2^s`), or `None` when it is already there (no copy): see
+    /// [`working_scale_exponent`]. Normals, colours, ids and channels are kept (normals
+    /// and labels are scale-free; callers map lengths back with `2^-s`).
+    pub fn at_working_scale(&self) -> Option<(PointCloud, i32)> {
+        let s = working_scale_exponent(&self.positions)?;
+        let mut scaled = self.clone();
+        scaled.positions = scale_pow2(&self.positions, s);
+        Some((scaled, s))
+    }
+}
+
+/// Floating-point methods run unscaled while the largest |coordinate| lies in
+/// `[2^-WORKING_SCALE_BITS, 2^WORKING_SCALE_BITS]`: products of up to 8 coordinate
+/// differences (squared distances, covariances, cross products, circumradii) then neither
+/// overflow nor fall into the subnormal range for any spacing above `2^-50` of the
+/// extent.
+pub const WORKING_SCALE_BITS: i32 = 64;
+
+/// The power-of-two exponent `s` that brings the largest |coordinate| of `positions`
+/// into `[1/2, 1)`, or `None` when it is already within `2^±WORKING_SCALE_BITS` (or
+/// every coordinate is zero). Multiplying by `2^s` is exact unless coordinates more
+/// than about 2^1000 times smaller than the largest drop below the subnormal grid
+/// (then they lose low bits, a relative error below the cloud's own precision), and it
+/// leaves every fraction of the bounding-box diagonal, every angle and every normal
+/// unchanged: methods whose parameters are such fractions give the same result.
+pub fn working_scale_exponent(positions: &[DVec3]) -> Option<i32> {
+    let m = positions
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    let lim = 2f64.powi(WORKING_SCALE_BITS);
+    if m == 0.0 || (m >= 1.0 / lim && m <= lim) {
+        return None;
+    }
+    // frexp: m = f · 2^e with f in [1/2, 1); subnormals are first lifted by 2^64.
+    let (m, lift) = if m < f64::MIN_POSITIVE {
+        (m * lim, WORKING_SCALE_BITS)
+    } else {
+        (m, 0)
+    };
+    let e = ((m.to_bits() >> 52) & 0x7ff) as i32 - 1022 - lift;
+    Some(-e)
+}
+
+/// `positions` multiplied by `2^s` in two steps of at most `2^±1023` each (exact while
+/// the results stay above the subnormal grid and below overflow).
+pub fn scale_pow2(positions: &[DVec3], s: i32) -> Vec<DVec3> {
+    let pow2 = |e: i32| f64::from_bits(((1023 + e.clamp(-1022, 1023)) as u64) << 52);
+    let h = s / 2;
+    let (f1, f2) = (pow2(h), pow2(s - h));
+    positions.iter().map(|&p| p * f1 * f2).collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn working_scale_is_an_exact_power_of_two_move() {
+        let unit = vec![DVec3::new(0.3, -0.9, 0.1), DVec3::new(1e-20, 0.5, 0.0)];
+        assert_eq!(working_scale_exponent(&unit), None);
+        assert_eq!(working_scale_exponent(&[DVec3::ZERO]), None);
+        let tiny = f64::from_bits(1);
+        for f in [1e-300, 1e-160, 1e-60, 1e80, 1e200, 1e300, tiny * 3e6] {
+            let pts: Vec<DVec3> = unit.iter().map(|&p| p * f).collect();
+            let s = working_scale_exponent(&pts).expect("outside the working range");
+            let q = scale_pow2(&pts, s);
+            let m = q.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+            assert!((0.5..1.0).contains(&m), "{f:e}: max {m}");
+            // The largest coordinates come back bit for bit.
+            assert_eq!(scale_pow2(&q, -s)[0].y, pts[0].y, "{f:e}");
+            let cloud = PointCloud::new(pts.clone()).unwrap();
+            let (c, s2) = cloud.at_working_scale().unwrap();
+            assert_eq!((c.positions(), s2), (&q[..], s));
+        }
+    }
 
     #[test]
     fn nan_position_is_rejected_with_its_index() {
