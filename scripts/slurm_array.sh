@@ -64,7 +64,7 @@ shard_job() {
     1) echo "rb-shard: shard $i/$n finished with failed cells (listed above); exit 1" ;;
     *) echo "rb-shard: shard $i/$n stopped with exit code $rc" ;;
     esac
-    exit "$rc"
+    return "$rc"
 }
 
 # Inside Slurm: merge the N shard files into <out>/results.jsonl and write the report,
@@ -109,8 +109,9 @@ merge_job() {
 case "${1:-}" in
 --shard-job)
     shift
-    shard_job "$@"
-    exit
+    rc=0
+    shard_job "$@" || rc=$?
+    exit "$rc"
     ;;
 --merge-job)
     shift

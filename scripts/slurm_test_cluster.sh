@@ -197,8 +197,8 @@ cluster_pids() {
 kill_pids() {
     (($#)) || return 0
     kill -TERM "$@" 2>/dev/null || true
-    local i left
-    for i in $(seq 1 50); do
+    local left
+    for _ in $(seq 1 50); do
         left=()
         for p in "$@"; do
             kill -0 "$p" 2>/dev/null && left+=("$p")
