@@ -115,7 +115,20 @@ pub fn check_k(name: &str, k: usize, min: usize) -> Result<(), MethodError> {
     Ok(())
 }
 
-/// Orients (when `orient_k > 0`) and packages the normals with diagnostics.
+/// True when all points lie on one line (or coincide): only then may every normal be
+/// zero-length.
+fn all_collinear(points: &[DVec3]) -> bool {
+    let Some(&a) = points.first() else {
+        return true;
+    };
+    let Some(&b) = points.iter().find(|&&p| p != a) else {
+        return true;
+    };
+    points.iter().all(|&p| (b - a).cross(p - a) == DVec3::ZERO)
+}
+
+/// Orients (when `orient_k > 0`) and packages the normals with diagnostics; fails when
+/// every normal is zero-length on points that are not collinear.
 pub fn finish(
     points: &[DVec3],
     mut normals: Vec<DVec3>,
@@ -124,6 +137,13 @@ pub fn finish(
 ) -> Result<Normals, MethodError> {
     let mut diagnostics = reconbench_geom::method::Diagnostics::new();
     let degenerate = normals.iter().filter(|n| **n == DVec3::ZERO).count();
+    if degenerate == normals.len() && !all_collinear(points) {
+        return Err(MethodError::Failed(format!(
+            "every one of the {} normals is zero-length although the points are not \
+             collinear",
+            normals.len()
+        )));
+    }
     diagnostics.insert(
         "degenerate_neighbourhoods".into(),
         Diagnostic::Number(degenerate as f64),
@@ -186,6 +206,10 @@ pub fn estimate_per_point_hits(
     fit: impl Fn(&[DVec3], usize, &[KnnHit], &mut Vec<u32>) -> DVec3 + Sync + Send,
 ) -> Result<Normals, MethodError> {
     check_k("k", k, min_k)?;
+    // Scale robustness: fit on the cloud moved exactly by a power of two into the
+    // working range (normals are scale-free, so they need no mapping back).
+    let scaled = cloud.at_working_scale();
+    let cloud = scaled.as_ref().map_or(cloud, |(c, _)| c);
     let pts = cloud.positions();
     check_min_points(pts, 3)?;
     // ASSUMPTION B-07: k includes the point itself.
