@@ -1,6 +1,5 @@
 //! Provenance of a run: code version, toolchain, machine, time (for the manifest).
 
-use std::process::Command;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
@@ -8,9 +7,10 @@ use serde::{Deserialize, Serialize};
 /// Where and with what a run happened.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Provenance {
-    /// `git rev-parse HEAD` of the working directory, or `unknown`.
+    /// The git commit the running binary was built from (`unknown` when it was built
+    /// outside a git checkout), whatever directory it runs in.
     pub git_commit: String,
-    /// Whether the work tree had uncommitted changes.
+    /// Whether that build's source tree had uncommitted changes to tracked files.
     pub git_dirty: Option<bool>,
     /// rustc that built the harness.
     pub rustc: String,
@@ -35,17 +35,8 @@ pub struct Provenance {
 impl Provenance {
     /// Collects provenance now.
     pub fn collect() -> Self {
-        let git = |args: &[&str]| {
-            Command::new("git")
-                .args(args)
-                .output()
-                .ok()
-                .filter(|o| o.status.success())
-                .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
-        };
-        let git_commit = git(&["rev-parse", "HEAD"]).unwrap_or_else(|| "unknown".into());
-        let git_dirty =
-            git(&["status", "--porcelain", "--untracked-files=no"]).map(|s| !s.is_empty());
+        let git_commit = env!("RECONBENCH_BUILD_COMMIT").to_string();
+        let git_dirty = env!("RECONBENCH_BUILD_DIRTY").parse::<bool>().ok();
         let cpu_model = std::fs::read_to_string("/proc/cpuinfo")
             .ok()
             .and_then(|t| {

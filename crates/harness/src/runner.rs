@@ -55,8 +55,37 @@ pub struct RunOptions {
     pub memory_limit_mib: Option<u64>,
     /// `RAYON_NUM_THREADS` of each worker.
     pub threads_per_worker: usize,
-    /// Draw a progress bar (only on a terminal).
+    /// Show progress: a bar on a terminal, else a line on stderr every `log_every_s`.
     pub progress: bool,
+    /// Seconds between progress lines when stderr is not a terminal (0: none).
+    pub log_every_s: f64,
+    /// Set to a signal number (SIGINT 2, SIGTERM 15) to stop the run cleanly: no new
+    /// cell starts, running workers are killed and their cells left for `--resume`.
+    pub stop: Arc<AtomicUsize>,
+}
+
+/// A stop flag for [`RunOptions::stop`] set by SIGINT and SIGTERM (to the signal's
+/// number); a second such signal ends the process at once with code 128 + signal.
+pub fn stop_on_signals() -> Result<Arc<AtomicUsize>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let stop = Arc::new(AtomicUsize::new(0));
+    let armed = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for sig in [SIGINT, SIGTERM] {
+        let reg = signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, armed.clone())
+            .and_then(|_| signal_hook::flag::register(sig, armed.clone()))
+            .and_then(|_| signal_hook::flag::register_usize(sig, stop.clone(), sig as usize));
+        reg.map_err(|e| HarnessError::failure(format!("cannot handle signal {sig}: {e}")))?;
+    }
+    Ok(stop)
+}
+
+/// A signal's name for messages.
+pub fn signal_name(sig: usize) -> String {
+    match sig {
+        2 => "SIGINT".into(),
+        15 => "SIGTERM".into(),
+        s => format!("signal {s}"),
+    }
 }
 
 /// File names of a run (shards write their own files).
@@ -104,6 +133,10 @@ pub struct RunSummary {
     pub results: PathBuf,
     /// Manifest file.
     pub manifest: PathBuf,
+    /// The signal that stopped the run early (see [`RunOptions::stop`]); the cells that
+    /// were running are not recorded, so `--resume` runs them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interrupted: Option<usize>,
 }
 
 /// The manifest written next to the results.
@@ -157,16 +190,18 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let (ok, mut failed) = run_cells(exp, opts, &limits, &cells, &todo, &results)?;
     compact(&cells, &results)?;
     failed.sort_by(|a, b| a.label.cmp(&b.label));
+    let interrupted = Some(opts.stop.load(Ordering::SeqCst)).filter(|&s| s != 0);
     Ok(RunSummary {
         experiment: exp.name.clone(),
         cells: cells.len(),
         skipped: cells.len() - todo.len(),
-        ran: todo.len(),
+        ran: ok + failed.len(),
         ok,
         failed,
         wall_s: t0.elapsed().as_secs_f64(),
         results,
         manifest: manifest_path,
+        interrupted,
     })
 }
 
@@ -297,68 +332,87 @@ fn run_cells(
     let bar = progress_bar(todo.len(), opts.progress);
     let write_error: Mutex<Option<HarnessError>> = Mutex::new(None);
     let running: Arc<Mutex<BTreeMap<usize, (String, f64)>>> = Arc::default();
+    let log = LogCounters::default();
+    let log_lines = opts.progress && bar.is_hidden() && opts.log_every_s > 0.0;
 
     std::thread::scope(|s| {
-        for _ in 0..opts.jobs.max(1).min(todo.len().max(1)) {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::SeqCst);
-                    let Some(cell) = todo.get(i) else { break };
-                    if write_error.lock().map(|e| e.is_some()).unwrap_or(true) {
-                        break;
-                    }
-                    let render = render_request(exp, opts, cell, min_seed);
-                    let progress =
-                        (!bar.is_hidden()).then(|| cell_progress(&bar, &running, i, cell));
-                    let row = run_cell_with_progress(
-                        cell,
-                        &opts.worker,
-                        limits.timeout_s,
-                        limits.memory_limit_mib,
-                        opts.threads_per_worker,
-                        render,
-                        progress,
-                    );
-                    if let Ok(mut r) = running.lock()
-                        && r.remove(&i).is_some()
-                    {
-                        bar.set_message(running_message(&r));
-                    }
-                    if row.status == Status::Ok {
-                        ok.fetch_add(1, Ordering::SeqCst);
-                    } else {
-                        let f = failed_cell(&row);
-                        let msg = format!(
-                            "cell {} failed ({}): {}",
-                            f.label,
-                            f.status.as_str(),
-                            f.reason
-                        );
-                        if bar.is_hidden() {
-                            if opts.progress {
-                                eprintln!("{msg}");
-                            }
-                        } else {
-                            bar.println(msg);
-                        }
-                        if let Ok(mut v) = failed.lock() {
-                            v.push(f);
-                        }
-                    }
-                    let res = store
-                        .lock()
-                        .map_err(|_| HarnessError::failure("store lock poisoned"))
-                        .and_then(|mut st| st.append(&row));
-                    if let Err(e) = res {
-                        if let Ok(mut w) = write_error.lock() {
-                            *w = Some(e);
-                        }
-                        break;
-                    }
-                    bar.inc(1);
-                }
-            });
+        if log_lines {
+            s.spawn(|| log_progress(&log, todo.len(), opts.log_every_s, &opts.stop));
         }
+        let workers: Vec<_> = (0..opts.jobs.max(1).min(todo.len().max(1)))
+            .map(|_| {
+                s.spawn(|| {
+                    loop {
+                        let i = next.fetch_add(1, Ordering::SeqCst);
+                        let Some(cell) = todo.get(i) else { break };
+                        if opts.stop.load(Ordering::SeqCst) != 0
+                            || write_error.lock().map(|e| e.is_some()).unwrap_or(true)
+                        {
+                            break;
+                        }
+                        let render = render_request(exp, opts, cell, min_seed);
+                        let progress =
+                            (!bar.is_hidden()).then(|| cell_progress(&bar, &running, i, cell));
+                        log.running.fetch_add(1, Ordering::SeqCst);
+                        let row = run_cell_inner(
+                            cell,
+                            &opts.worker,
+                            limits,
+                            opts.threads_per_worker,
+                            render,
+                            progress,
+                            Some(&opts.stop),
+                        );
+                        log.running.fetch_sub(1, Ordering::SeqCst);
+                        if let Ok(mut r) = running.lock()
+                            && r.remove(&i).is_some()
+                        {
+                            bar.set_message(running_message(&r));
+                        }
+                        // Interrupted: the cell is left for `--resume`, not recorded.
+                        let Some(row) = row else { break };
+                        if row.status == Status::Ok {
+                            ok.fetch_add(1, Ordering::SeqCst);
+                        } else {
+                            let f = failed_cell(&row);
+                            let msg = format!(
+                                "cell {} failed ({}): {}",
+                                f.label,
+                                f.status.as_str(),
+                                f.reason
+                            );
+                            if bar.is_hidden() {
+                                if opts.progress {
+                                    eprintln!("{msg}");
+                                }
+                            } else {
+                                bar.println(msg);
+                            }
+                            if let Ok(mut v) = failed.lock() {
+                                v.push(f);
+                            }
+                            log.failed.fetch_add(1, Ordering::SeqCst);
+                        }
+                        let res = store
+                            .lock()
+                            .map_err(|_| HarnessError::failure("store lock poisoned"))
+                            .and_then(|mut st| st.append(&row));
+                        if let Err(e) = res {
+                            if let Ok(mut w) = write_error.lock() {
+                                *w = Some(e);
+                            }
+                            break;
+                        }
+                        bar.inc(1);
+                        log.done.fetch_add(1, Ordering::SeqCst);
+                    }
+                })
+            })
+            .collect();
+        for w in workers {
+            let _ = w.join();
+        }
+        log.finished.store(true, Ordering::SeqCst);
     });
     bar.finish_and_clear();
     if let Some(e) = write_error.into_inner().ok().flatten() {
@@ -368,6 +422,62 @@ fn run_cells(
         ok.load(Ordering::SeqCst),
         failed.into_inner().unwrap_or_default(),
     ))
+}
+
+/// What the progress lines report, updated by the worker threads.
+#[derive(Debug, Default)]
+struct LogCounters {
+    done: AtomicUsize,
+    failed: AtomicUsize,
+    running: AtomicUsize,
+    finished: std::sync::atomic::AtomicBool,
+}
+
+/// Prints a progress line on stderr every `every_s` seconds until the run finishes:
+/// for logs (Slurm, nohup, CI) where no progress bar can be drawn.
+fn log_progress(c: &LogCounters, total: usize, every_s: f64, stop: &AtomicUsize) {
+    let t0 = Instant::now();
+    let mut next = every_s;
+    while !c.finished.load(Ordering::SeqCst) && stop.load(Ordering::SeqCst) == 0 {
+        std::thread::sleep(Duration::from_millis(50));
+        let t = t0.elapsed().as_secs_f64();
+        if t >= next {
+            next = t + every_s;
+            eprintln!(
+                "{}",
+                progress_line(
+                    c.done.load(Ordering::SeqCst),
+                    c.failed.load(Ordering::SeqCst),
+                    c.running.load(Ordering::SeqCst),
+                    total,
+                    t
+                )
+            );
+        }
+    }
+}
+
+/// `progress: 45/513 cells done (2 failed), 2 running, 1m20s elapsed, ETA 13m52s`.
+fn progress_line(done: usize, failed: usize, running: usize, total: usize, t: f64) -> String {
+    let eta = if done == 0 {
+        "unknown".to_string()
+    } else {
+        duration_text(t / done as f64 * total.saturating_sub(done) as f64)
+    };
+    format!(
+        "progress: {done}/{total} cells done ({failed} failed), {running} running, {} elapsed, ETA {eta}",
+        duration_text(t)
+    )
+}
+
+/// Seconds as `45s`, `1m20s` or `2h03m`.
+fn duration_text(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    match s {
+        0..60 => format!("{s}s"),
+        60..3600 => format!("{}m{:02}s", s / 60, s % 60),
+        _ => format!("{}h{:02}m", s / 3600, s / 60 % 60),
+    }
 }
 
 /// The render a reconstruction cell at the lowest seed index asks for, if renders are on.
@@ -494,14 +604,32 @@ pub fn run_cell_with_progress(
     render: Option<RenderRequest>,
     progress: Option<ProgressFn>,
 ) -> Row {
+    let limits = Limits {
+        timeout_s,
+        memory_limit_mib,
+    };
+    run_cell_inner(cell, worker, &limits, threads, render, progress, None)
+        .unwrap_or_else(|| Row::failed(cell, Status::Crash, "interrupted"))
+}
+
+/// Runs a cell in a worker; `None` when `stop` was set while it ran (the worker is
+/// killed and nothing is recorded).
+fn run_cell_inner(
+    cell: &Cell,
+    worker: &[OsString],
+    limits: &Limits,
+    threads: usize,
+    render: Option<RenderRequest>,
+    progress: Option<ProgressFn>,
+    stop: Option<&AtomicUsize>,
+) -> Option<Row> {
     let t0 = Instant::now();
     let req = Request {
         cell: cell.clone(),
-        timeout_s,
+        timeout_s: limits.timeout_s,
         render,
     };
-    let mut row = match spawn_and_wait(&req, worker, timeout_s, memory_limit_mib, threads, progress)
-    {
+    let mut row = match spawn_and_wait(&req, worker, limits, threads, progress, stop) {
         Ok(Outcome::Reply(reply)) => {
             let mut row = Row::failed(cell, reply.status, "");
             row.error = reply.error;
@@ -513,6 +641,7 @@ pub fn run_cell_with_progress(
             row
         }
         Ok(Outcome::Failed(status, reason)) => Row::failed(cell, status, reason),
+        Ok(Outcome::Interrupted) => return None,
         Err(e) => Row::failed(
             cell,
             Status::Crash,
@@ -520,25 +649,31 @@ pub fn run_cell_with_progress(
         ),
     };
     row.cost.wall_s = t0.elapsed().as_secs_f64();
-    row
+    Some(row)
 }
 
 enum Outcome {
     Reply(Box<Reply>),
     Failed(Status, String),
+    Interrupted,
 }
 
+/// Starts a worker in its own process group (so a terminal's Ctrl-C reaches only the
+/// runner, which then stops the workers itself) and waits for it under the limits.
 fn spawn_and_wait(
     req: &Request,
     worker: &[OsString],
-    timeout_s: f64,
-    memory_limit_mib: Option<u64>,
+    limits: &Limits,
     threads: usize,
     progress: Option<ProgressFn>,
+    stop: Option<&AtomicUsize>,
 ) -> std::io::Result<Outcome> {
+    use std::os::unix::process::CommandExt;
+    let (timeout_s, memory_limit_mib) = (limits.timeout_s, limits.memory_limit_mib);
     let payload = serde_json::to_vec(req).map_err(std::io::Error::other)?;
     let mut child = Command::new(&worker[0])
         .args(&worker[1..])
+        .process_group(0)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -559,9 +694,14 @@ fn spawn_and_wait(
     let t0 = Instant::now();
     let timeout = Duration::from_secs_f64(timeout_s);
     let mut killed: Option<(Status, String)> = None;
+    let mut interrupted = false;
     let status: ExitStatus = loop {
         if let Some(st) = child.try_wait()? {
             break st;
+        }
+        if !interrupted && stop.is_some_and(|s| s.load(Ordering::SeqCst) != 0) {
+            interrupted = true;
+            let _ = child.kill();
         }
         if killed.is_none() {
             if t0.elapsed() > timeout {
@@ -586,6 +726,9 @@ fn spawn_and_wait(
     let _ = writer.join();
     let stdout = out_reader.join().unwrap_or_default();
     let stderr = err_reader.join().unwrap_or_default();
+    if interrupted {
+        return Ok(Outcome::Interrupted);
+    }
     if let Some((st, reason)) = killed {
         return Ok(Outcome::Failed(st, reason));
     }

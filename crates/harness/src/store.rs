@@ -124,6 +124,17 @@ pub struct Cost {
     /// Wall time of each step of a pipeline, in order (left out for a single method).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub steps: Vec<(String, f64)>,
+    /// The method's own timing diagnostics (see [`is_timing`]), kept here rather than
+    /// in `diagnostics` so that rows compare byte for byte apart from `cost`.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub timings: BTreeMap<String, f64>,
+}
+
+/// Whether a diagnostic is a timing (machine-dependent): its name, after any pipeline
+/// step prefix `step/`, is `seconds` or ends in `_s` or `_per_second`.
+pub fn is_timing(name: &str) -> bool {
+    let last = name.rsplit('/').next().unwrap_or(name);
+    last == "seconds" || last.ends_with("_s") || last.ends_with("_per_second")
 }
 
 /// One result line.

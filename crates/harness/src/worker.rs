@@ -18,6 +18,21 @@ use crate::experiment::Cell;
 use crate::provenance::{cpu_seconds, rss_mib};
 use crate::store::{Cost, Dist, Status};
 
+/// Ends this worker when its runner is gone (killed with SIGKILL, say), so that no
+/// worker outlives the run as an orphan: the runner puts each worker in its own process
+/// group, so nothing else would stop it.
+fn exit_with_parent() {
+    let parent = std::os::unix::process::parent_id();
+    std::thread::spawn(move || {
+        loop {
+            std::thread::sleep(Duration::from_millis(200));
+            if std::os::unix::process::parent_id() != parent {
+                std::process::exit(137);
+            }
+        }
+    });
+}
+
 /// Prefix of the reply line on stdout.
 pub const REPLY_PREFIX: &str = "RECONBENCH-REPLY ";
 /// Prefix of the panic line on stderr.
@@ -86,6 +101,7 @@ pub fn handle(req: &Request) -> Reply {
                 }
             }
             let mut diagnostics = o.diagnostics;
+            let timings = take_timings(&mut diagnostics);
             if let Some(e) = error {
                 diagnostics.insert("render_error".into(), Value::String(e));
             }
@@ -102,6 +118,7 @@ pub fn handle(req: &Request) -> Reply {
                     metrics_s: o.metrics_s,
                     phases: o.phases,
                     steps: o.steps,
+                    timings,
                     ..Cost::default()
                 },
             }
@@ -121,8 +138,26 @@ pub fn handle(req: &Request) -> Reply {
     reply
 }
 
+/// Moves the numeric timing diagnostics ([`crate::store::is_timing`]) out of a row's
+/// diagnostics, for its `cost`.
+fn take_timings(d: &mut BTreeMap<String, Value>) -> BTreeMap<String, f64> {
+    let names: Vec<String> = d
+        .keys()
+        .filter(|k| crate::store::is_timing(k))
+        .cloned()
+        .collect();
+    names
+        .into_iter()
+        .filter_map(|k| {
+            let v = d.remove(&k)?;
+            v.as_f64().map(|x| (k, x))
+        })
+        .collect()
+}
+
 /// The `worker` verb: request on `input`, reply line on `output`.
 pub fn serve(mut input: impl Read, mut output: impl Write) -> Result<()> {
+    exit_with_parent();
     std::panic::set_hook(Box::new(|info| {
         let msg = info
             .payload()

@@ -122,6 +122,10 @@ pub struct RunArgs {
     /// Print the run summary as JSON.
     #[arg(long)]
     json: bool,
+    /// When stderr is not a terminal (a log file, Slurm, nohup, CI): print a progress
+    /// line every SECONDS (0: none).
+    #[arg(long, value_name = "SECONDS", default_value_t = 10.0)]
+    log_every: f64,
     /// Check the file and print the grid (cells, keys, labels) without running anything.
     #[arg(long)]
     dry_run: bool,
@@ -299,6 +303,12 @@ fn run_experiment(a: RunArgs) -> CliResult {
     {
         return Err(CliError::input(format!("--timeout must be > 0, got {t}")));
     }
+    if !(a.log_every.is_finite() && a.log_every >= 0.0) {
+        return Err(CliError::input(format!(
+            "--log-every must be >= 0 seconds, got {}",
+            a.log_every
+        )));
+    }
     if a.dry_run {
         return print_grid(&exp, shard, a.json);
     }
@@ -322,8 +332,13 @@ fn run_experiment(a: RunArgs) -> CliResult {
         memory_limit_mib: a.memory_limit,
         threads_per_worker: a.threads_per_worker.max(1),
         progress: !a.json,
+        log_every_s: a.log_every,
+        stop: runner::stop_on_signals().map_err(harness_err)?,
     };
     let summary = runner::run(&exp, &opts).map_err(harness_err)?;
+    if let Some(sig) = summary.interrupted {
+        return Err(interrupted(&a, &summary, sig));
+    }
     let mut misses = 0;
     let mut report_path = None;
     if !a.no_report && shard.is_none() {
@@ -373,6 +388,29 @@ fn run_experiment(a: RunArgs) -> CliResult {
         )));
     }
     Ok(())
+}
+
+/// The error of a run stopped by a signal: what was kept and how to go on; the exit
+/// code is 128 + the signal (130 for SIGINT, 143 for SIGTERM), as a shell reports it.
+fn interrupted(a: &RunArgs, summary: &runner::RunSummary, sig: usize) -> CliError {
+    let mut again = format!("reconbench run {}", a.experiment.display());
+    if let Some(o) = &a.out {
+        again.push_str(&format!(" --out {}", o.display()));
+    }
+    if let Some(s) = &a.shard {
+        again.push_str(&format!(" --shard {s}"));
+    }
+    CliError {
+        message: format!(
+            "interrupted by {}: {} of {} cells are saved in {} ({} run now); the cells that were running are not; resume with: {again} --resume",
+            runner::signal_name(sig),
+            summary.skipped + summary.ran,
+            summary.cells,
+            summary.results.display(),
+            summary.ran,
+        ),
+        code: u8::try_from(128 + sig).unwrap_or(1),
+    }
 }
 
 fn list(a: ListArgs) -> CliResult {

@@ -17,7 +17,7 @@ use clap::{Parser, Subcommand};
 pub struct CliError {
     /// One-line message for stderr.
     pub message: String,
-    /// 2 for bad input, 1 for anything else.
+    /// 2 for bad input, 128 + signal for a run stopped by a signal, 1 for anything else.
     pub code: u8,
 }
 

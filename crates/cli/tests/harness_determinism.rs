@@ -1,0 +1,53 @@
+//! Two runs of one experiment give byte-identical rows apart from `cost`, and no
+//! timing is left outside `cost`.
+
+mod harness_common;
+use harness_common::*;
+
+const EXP: &str = r#"
+    seeds = 2
+    [[datasets]]
+    shape = "torus"
+    points = 1500
+    [[methods]]
+    name = "priority-front"
+    [[methods]]
+    name = "ufm"
+    [report]
+    plots = false
+    renders = false
+"#;
+
+#[test]
+fn rows_are_identical_apart_from_cost_and_timings_live_in_cost() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = write(dir.path(), "det.toml", EXP);
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    for out in [&a, &b] {
+        ok(&reconbench(&[
+            "run",
+            exp.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "-j",
+            "2",
+            "--no-report",
+        ]));
+    }
+    assert_eq!(rows_without_cost(&a), rows_without_cost(&b));
+    for r in rows(&a) {
+        let diag = r["diagnostics"].as_object().unwrap();
+        let timing: Vec<&String> = diag
+            .keys()
+            .filter(|k| k.ends_with("_s") || k.ends_with("_per_second") || *k == "seconds")
+            .collect();
+        assert!(timing.is_empty(), "timings outside cost: {timing:?}");
+        let timings = r["cost"]["timings"].as_object().unwrap();
+        let want = if r["spec"]["method"] == "ufm" {
+            "dt_s"
+        } else {
+            "triangles_per_second"
+        };
+        assert!(timings.contains_key(want), "{timings:?}");
+    }
+}
