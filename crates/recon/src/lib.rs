@@ -28,6 +28,7 @@ pub mod ebt;
 pub mod hc_it;
 pub mod poisson;
 pub mod priority_front;
+pub mod scale;
 pub mod ufm;
 
 pub use ball_pivoting::{BallPivoting, BallPivotingParams};

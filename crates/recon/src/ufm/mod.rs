@@ -193,7 +193,9 @@ impl Reconstructor for Ufm {
     ) -> Result<Reconstruction, MethodError> {
         let p = &self.params;
         p.validate()?;
-        let input = cloud.positions();
+        let original = cloud.positions();
+        let scaled = cloud.at_working_scale();
+        let input = crate::scale::working(cloud, &scaled).positions();
         let n = input.len();
         if n >= u32::MAX as usize {
             return Err(MethodError::InvalidInput(format!(
@@ -335,6 +337,10 @@ impl Reconstructor for Ufm {
         num(&mut d, "dt_s", dt_s);
         num(&mut d, "ufm_s", t_start.elapsed().as_secs_f64() - dt_s);
         d.insert("assumptions".into(), Diagnostic::Text(assumption_flags(p)));
+        crate::scale::check_not_collapsed(NAME, &mesh, input)?;
+        if scaled.is_some() {
+            mesh = crate::scale::on_input_points(mesh, original)?;
+        }
         Ok(Reconstruction {
             mesh,
             refused,

@@ -275,7 +275,9 @@ impl NormalEstimator for UfmMesh {
     fn estimate(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Normals, MethodError> {
         let p = &self.params;
         p.validate()?;
-        let input = cloud.positions();
+        // Normals are scale-free: run at the exact working scale, nothing to map back.
+        let scaled = cloud.at_working_scale();
+        let input = crate::scale::working(cloud, &scaled).positions();
         let st = super::run_ufm(input, &p.ufm(), ctx)?;
         ctx.checkpoint()?;
         let (nv_normals, branch) = ctx.phase("normals", || estimate_from_state(&st, p.rings));
@@ -309,6 +311,7 @@ impl NormalEstimator for UfmMesh {
             "degenerate_neighbourhoods".into(),
             Diagnostic::Number(normals.iter().filter(|n| **n == DVec3::ZERO).count() as f64),
         );
+        crate::scale::check_normals_not_collapsed(NAME, &normals, input)?;
         let oriented = p.orient_k > 0;
         if oriented {
             ctx.checkpoint()?;

@@ -1,0 +1,114 @@
+//! Scale robustness shared by the reconstructors: run at the exact working scale, hand
+//! back a mesh on the input's own points, and refuse a result that collapsed to nothing.
+//!
+//! A reconstructor whose parameters are fractions of the diagonal, multiples of the
+//! spacing, angles or counts gives the same faces on a cloud multiplied by a power of
+//! two, so it can run on the copy [`PointCloud::at_working_scale`] makes (largest
+//! |coordinate| in `[1/2, 1)` when it is outside `2^±64`), where no squared distance,
+//! circumradius or volume overflows or underflows, and then put the input's points back
+//! under the faces ([`on_input_points`]).
+
+use glam::DVec3;
+use reconbench_geom::method::MethodError;
+use reconbench_geom::{PointCloud, TriMesh};
+
+/// The cloud to run on: the working-scale copy when one was made, else the input.
+pub fn working<'a>(cloud: &'a PointCloud, scaled: &'a Option<(PointCloud, i32)>) -> &'a PointCloud {
+    scaled.as_ref().map_or(cloud, |(c, _)| c)
+}
+
+/// `mesh` (built on the working-scale copy of `input`, same vertex order) with the input
+/// points, bit for bit, as its vertices; vertex normals are kept (scale-free).
+pub fn on_input_points(mesh: TriMesh, input: &[DVec3]) -> Result<TriMesh, MethodError> {
+    if mesh.n_vertices() != input.len() {
+        return Err(MethodError::Failed(format!(
+            "mesh of {} vertices cannot take the {} input points back",
+            mesh.n_vertices(),
+            input.len()
+        )));
+    }
+    let normals = mesh.vertex_normals().map(<[DVec3]>::to_vec);
+    let out = TriMesh::new(input.to_vec(), mesh.faces().to_vec())?;
+    Ok(match normals {
+        Some(n) => out.with_vertex_normals(n)?,
+        None => out,
+    })
+}
+
+/// Fails when `mesh` has no face although `points` hold three non-collinear points: a
+/// reconstruction that collapsed to nothing is an error, not an empty success.
+pub fn check_not_collapsed(
+    name: &str,
+    mesh: &TriMesh,
+    points: &[DVec3],
+) -> Result<(), MethodError> {
+    if mesh.n_faces() > 0 || all_collinear(points) {
+        return Ok(());
+    }
+    Err(MethodError::Failed(format!(
+        "{name}: no face on {} points that are not collinear",
+        points.len()
+    )))
+}
+
+/// Fails when every normal is zero-length although `points` are not collinear.
+pub fn check_normals_not_collapsed(
+    name: &str,
+    normals: &[DVec3],
+    points: &[DVec3],
+) -> Result<(), MethodError> {
+    if normals.iter().any(|n| *n != DVec3::ZERO) || all_collinear(points) {
+        return Ok(());
+    }
+    Err(MethodError::Failed(format!(
+        "{name}: every one of the {} normals is zero-length although the points are not \
+         collinear",
+        normals.len()
+    )))
+}
+
+/// True when all points lie on one line (or coincide), tested exactly in floating point
+/// on the cross products (a non-zero cross product proves non-collinearity).
+fn all_collinear(points: &[DVec3]) -> bool {
+    let Some(&a) = points.first() else {
+        return true;
+    };
+    let Some(&b) = points.iter().find(|&&p| p != a) else {
+        return true;
+    };
+    points.iter().all(|&p| (b - a).cross(p - a) == DVec3::ZERO)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn collapse_is_an_error_only_on_a_spread_cloud() {
+        let empty = TriMesh::new(vec![DVec3::ZERO; 3], Vec::new()).unwrap();
+        let line = [DVec3::ZERO, DVec3::X, DVec3::X * 2.0];
+        assert!(check_not_collapsed("m", &empty, &line).is_ok());
+        let tri = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        let err = check_not_collapsed("m", &empty, &tri).unwrap_err();
+        assert!(err.to_string().contains("no face on 3 points"), "{err}");
+        let one = TriMesh::new(tri.to_vec(), vec![[0, 1, 2]]).unwrap();
+        assert!(check_not_collapsed("m", &one, &tri).is_ok());
+    }
+
+    #[test]
+    fn input_points_come_back_bit_for_bit() {
+        let input = vec![
+            DVec3::new(1e300, 0.0, 0.0),
+            DVec3::new(0.0, 3e300, 0.0),
+            DVec3::Z * 1e300,
+        ];
+        let cloud = PointCloud::new(input.clone()).unwrap();
+        let scaled = cloud.at_working_scale();
+        let work = working(&cloud, &scaled);
+        assert!(work.positions()[1].y < 1.0);
+        let mesh = TriMesh::new(work.positions().to_vec(), vec![[0, 1, 2]]).unwrap();
+        let back = on_input_points(mesh, &input).unwrap();
+        assert_eq!(back.vertices(), &input[..]);
+        assert_eq!(back.faces(), &[[0, 1, 2]]);
+    }
+}
