@@ -138,6 +138,10 @@ pub struct DistanceEval {
     /// Absolute distance of every vertex of R to S (index = vertex id), when requested
     /// and accuracy was computed. Not serialised.
     pub vertex_error: Option<Vec<f64>>,
+    /// Absolute distance to S of every area sample of R (the mesh error over its
+    /// surface, vertices not included), kept with `vertex_error` for the error
+    /// distribution of box plots. Not serialised.
+    pub sample_error: Option<Vec<f64>>,
 }
 
 impl DistanceEval {
@@ -267,6 +271,7 @@ pub fn eval_distance(
         }
         let samples = sample_mesh(recon, n_r, opts.seed)?;
         let mut d = reference.distances(&samples.positions)?;
+        let sample_error = opts.vertex_error.then(|| d.clone());
         let mut vertex_samples = 0;
         let mut vertex_error = None;
         if opts.include_vertices || opts.vertex_error {
@@ -284,6 +289,7 @@ pub fn eval_distance(
             distances: d,
             vertex_samples,
             vertex_error,
+            sample_error,
         }))
     };
     let completeness_side = || -> Result<Option<Vec<f64>>> {
@@ -298,9 +304,14 @@ pub fn eval_distance(
         Ok(Some(hits.into_iter().map(|h| h.distance).collect()))
     };
     let (acc, comp) = rayon::join(accuracy_side, completeness_side);
-    let (accuracy_values, recon_vertex_samples, vertex_error) = match acc? {
-        Some(a) => (Some(a.distances), a.vertex_samples, a.vertex_error),
-        None => (None, 0, None),
+    let (accuracy_values, recon_vertex_samples, vertex_error, sample_error) = match acc? {
+        Some(a) => (
+            Some(a.distances),
+            a.vertex_samples,
+            a.vertex_error,
+            a.sample_error,
+        ),
+        None => (None, 0, None, None),
     };
     let recon_area_samples = if accuracy_values.is_some() { n_r } else { 0 };
     let completeness_values = comp?;
@@ -336,6 +347,7 @@ pub fn eval_distance(
         reference_samples,
         seed: opts.seed,
         vertex_error,
+        sample_error,
     })
 }
 
@@ -344,6 +356,7 @@ struct AccuracySide {
     distances: Vec<f64>,
     vertex_samples: usize,
     vertex_error: Option<Vec<f64>>,
+    sample_error: Option<Vec<f64>>,
 }
 
 /// Share of `d` that is `<= tau`.

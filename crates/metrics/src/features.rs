@@ -241,6 +241,12 @@ impl FeatureEval {
         let fnn = self.positives[k] - tp;
         ratio(2 * tp, 2 * tp + fp + fnn)
     }
+    /// Detected points farther than `r` (`k = 0`) or `2r` (`k = 1`) from every counted
+    /// curve: the false positives, defined (0 or more) also where the ground truth has no
+    /// feature and precision, recall and F1 are not.
+    pub fn false_positives(&self, k: usize) -> usize {
+        self.detected - self.true_positives[k]
+    }
 }
 
 impl Report for FeatureEval {
@@ -254,6 +260,12 @@ impl Report for FeatureEval {
         put(&mut e, "feature_precision_2r", self.precision(1));
         put(&mut e, "feature_recall_2r", self.recall(1));
         put(&mut e, "feature_f1_2r", self.f1(1));
+        put(&mut e, "feature_false_positives", self.false_positives(0));
+        put(
+            &mut e,
+            "feature_false_positives_2r",
+            self.false_positives(1),
+        );
         put(&mut e, "feature_dist_mean", nz(self.dist_mean / d));
         put(&mut e, "feature_dist_max", nz(self.dist_max / d));
         put(&mut e, "feature_dist_mean_abs", nz(self.dist_mean));

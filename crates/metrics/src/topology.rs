@@ -5,8 +5,12 @@
 //!   face counts of the mesh (the seed's V is the number of input points, which an
 //!   interpolating mesh uses as its vertices) and G the ground-truth genus; only for a
 //!   closed ground truth of known genus.
-//! * `topology_ok` = watertight, same number of components and same genus as the ground
-//!   truth.
+//! * `topology_type_ok` = watertight, same number of components and same genus as the
+//!   ground truth (the topological type alone; the meaning `topology_ok` had before).
+//! * `topology_ok` = `topology_type_ok` and no self-intersecting face pair (when they are
+//!   counted): a surface that passes through itself is not an embedding of the true one,
+//!   however right its Euler characteristic. Dropped input points are not a topology
+//!   defect; they are counted apart (`unreferenced_vertices`).
 //! * Self-intersections: pairs of faces `(f, g)`, `f < g`, that are not adjacent and
 //!   whose closed triangles intersect. Broad phase: a bounding-box hierarchy; narrow
 //!   phase: an exact test on Shewchuk's robust `orient3d` / `orient2d` (the `robust`
@@ -86,8 +90,9 @@ impl TopologyEval {
         Some((2 * v + 4 * (g - 1) - f).unsigned_abs())
     }
 
-    /// Watertight, same component count and same genus as the ground truth.
-    pub fn topology_ok(&self) -> Option<bool> {
+    /// Watertight, same component count and same genus as the ground truth: the
+    /// topological type alone, self-intersections allowed.
+    pub fn topology_type_ok(&self) -> Option<bool> {
         let gt = self.ground_truth?;
         let g = gt.genus?;
         Some(
@@ -95,6 +100,13 @@ impl TopologyEval {
                 && self.report.components == gt.components
                 && self.report.genus == Some(g),
         )
+    }
+
+    /// [`topology_type_ok`](Self::topology_type_ok) and no self-intersecting face pair
+    /// (when self-intersections were counted).
+    pub fn topology_ok(&self) -> Option<bool> {
+        let type_ok = self.topology_type_ok()?;
+        Some(type_ok && self.self_intersections.unwrap_or(0) == 0)
     }
 }
 
@@ -134,6 +146,7 @@ impl Report for TopologyEval {
             self.ground_truth.map(|g| g.components),
         );
         put(&mut e, "delta_f", self.delta_f());
+        put(&mut e, "topology_type_ok", self.topology_type_ok());
         put(&mut e, "topology_ok", self.topology_ok());
         e
     }
