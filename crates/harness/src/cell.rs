@@ -321,7 +321,18 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
                     .map(|x| x / diag)
                     .collect(),
             };
-            out.dist = Dist::of("vertex distance (diag)", &verr);
+            // The error over the mesh surface, not at its vertices (which an
+            // interpolating method takes from the noisy input).
+            let serr: Vec<f64> = ev
+                .distance
+                .sample_error
+                .as_deref()
+                .unwrap_or(&[])
+                .iter()
+                .map(|x| x / diag)
+                .collect();
+            out.dist = Dist::of("surface distance (diag)", &serr)
+                .or_else(|| Dist::of("vertex distance (diag)", &verr));
             out.metrics_s = t.elapsed().as_secs_f64();
             out.diagnostics = diagnostics_json(&r.diagnostics);
             out.render = Some(RenderData {
