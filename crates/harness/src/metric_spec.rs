@@ -67,14 +67,26 @@ pub fn default_metrics(kind: MethodKind) -> &'static [&'static str] {
             "normal_pgp5",
             "normal_pgp10",
         ],
-        MethodKind::Features => &["feature_f1", "feature_precision", "feature_recall"],
+        MethodKind::Features => &[
+            "feature_f1",
+            "feature_precision",
+            "feature_recall",
+            "feature_false_positives",
+        ],
         MethodKind::Filter => &[
             "cloud_rms_dist",
             "cloud_mean_dist",
             "points_out",
             "outliers_removed",
         ],
-        MethodKind::Reconstruct => &["chamfer_l1", "hausdorff", "fscore_0.01", "topology_ok"],
+        MethodKind::Reconstruct => &[
+            "chamfer_l1",
+            "hausdorff",
+            "fscore_0.005",
+            "topology_ok",
+            "self_intersections",
+            "unreferenced_vertices",
+        ],
     }
 }
 
