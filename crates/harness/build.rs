@@ -21,14 +21,14 @@ fn main() {
     println!("cargo:rerun-if-env-changed=RECONBENCH_BUILD_COMMIT");
     let git = |args: &[&str]| run(Command::new("git").arg("-C").arg(&root).args(args));
     let (commit, dirty) = match std::env::var("RECONBENCH_BUILD_COMMIT") {
-        Ok(c) if !c.trim().is_empty() => (c.trim().to_string(), String::new()),
+        Ok(c) if !c.trim().is_empty() => (c.trim().to_string(), "unknown".to_string()),
         _ => match git(&["rev-parse", "HEAD"]) {
             Some(c) => {
                 let dirty = git(&["status", "--porcelain", "--untracked-files=no"])
-                    .map_or(String::new(), |s| (!s.is_empty()).to_string());
+                    .map_or("unknown".to_string(), |s| (!s.is_empty()).to_string());
                 (c, dirty)
             }
-            None => ("unknown".into(), String::new()),
+            None => ("unknown".into(), "unknown".into()),
         },
     };
     println!("cargo:rustc-env=RECONBENCH_BUILD_COMMIT={commit}");

@@ -51,3 +51,47 @@ fn rows_are_identical_apart_from_cost_and_timings_live_in_cost() {
         assert!(timings.contains_key(want), "{timings:?}");
     }
 }
+
+#[test]
+fn provenance_names_the_commit_of_the_binary_wherever_it_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "tiny.toml",
+        "[[datasets]]\nshape = \"sphere\"\npoints = 50\n[[methods]]\nname = \"debug-sleep\"\nparams = { seconds = 0 }\n[report]\nplots = false\n",
+    );
+    // Run from a directory outside any git checkout.
+    let out = std::process::Command::new(BIN)
+        .args(["run", "tiny.toml", "--out", "out", "--no-report"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    ok(&out);
+    let manifest: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("out/manifest.json")).unwrap(),
+    )
+    .unwrap();
+    let commit = manifest["runs"][0]["git_commit"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert!(
+        commit.len() == 40 && commit.chars().all(|c| c.is_ascii_hexdigit()),
+        "{commit}"
+    );
+    let repo = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+    let known = std::process::Command::new("git")
+        .args([
+            "-C",
+            repo,
+            "cat-file",
+            "-e",
+            &format!("{commit}^{{commit}}"),
+        ])
+        .status()
+        .unwrap();
+    assert!(
+        known.success(),
+        "{commit} is not a commit of this repository"
+    );
+}

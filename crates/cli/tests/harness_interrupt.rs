@@ -218,3 +218,28 @@ fn progress_goes_to_stderr_as_lines_without_a_terminal() {
     );
     assert!(lines.iter().any(|l| l.contains("ETA ")), "{lines:?}");
 }
+
+/// As `scancel` does: SIGTERM to the runner and its workers at once. The cells that
+/// were running are not recorded as crashed (a resume must run them).
+#[test]
+fn sigterm_to_the_whole_process_tree_records_no_crashed_cell() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = write(dir.path(), "slow.toml", QUICK_THEN_LONG);
+    let out = dir.path().join("out");
+    let marker = format!("tree-{}", std::process::id());
+    let child = start(&exp, &out, &marker, &[]);
+    wait_rows(&out, 4);
+    std::thread::sleep(Duration::from_millis(500));
+    let procs = marked(&marker);
+    assert_eq!(procs.len(), 3, "the runner and two workers run");
+    // Workers first, so they die before the runner hears of it.
+    for pid in procs.iter().filter(|&&p| p != child.id()) {
+        signal(*pid, "-TERM");
+    }
+    signal(child.id(), "-TERM");
+    let res = finish(child);
+    assert_eq!(res.status.code(), Some(143));
+    let saved = rows(&out);
+    assert_eq!(saved.len(), 4, "{saved:?}");
+    assert!(saved.iter().all(|r| r["status"] == "ok"), "{saved:?}");
+}

@@ -726,7 +726,7 @@ fn spawn_and_wait(
     let _ = writer.join();
     let stdout = out_reader.join().unwrap_or_default();
     let stderr = err_reader.join().unwrap_or_default();
-    if interrupted {
+    if interrupted || stopped_with_the_run(status, stop) {
         return Ok(Outcome::Interrupted);
     }
     if let Some((st, reason)) = killed {
@@ -745,6 +745,27 @@ fn spawn_and_wait(
     }
     let (st, reason) = classify(status, &stderr);
     Ok(Outcome::Failed(st, reason))
+}
+
+/// Whether a worker that died of SIGINT or SIGTERM went down with the whole run: a
+/// scheduler's cancel (`scancel`) or a kill of the process tree signals the workers
+/// together with the runner, and the runner's own handler may run a moment later, so
+/// it is given half a second to set `stop`. Such a cell did not finish and is left for
+/// `--resume`; a worker signalled alone is a crash.
+fn stopped_with_the_run(status: ExitStatus, stop: Option<&AtomicUsize>) -> bool {
+    use std::os::unix::process::ExitStatusExt;
+    let Some(stop) = stop else { return false };
+    if !matches!(status.signal(), Some(2 | 15)) {
+        return false;
+    }
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_millis(500) {
+        if stop.load(Ordering::SeqCst) != 0 {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    false
 }
 
 fn read_tail(r: Option<&mut impl Read>, cap: usize) -> String {
