@@ -3,8 +3,9 @@
 //! Every variant names what is at fault (the file, the line or byte offset, the index of
 //! the offending element, or the parameter) so that the CLI can print a single useful line.
 
+use std::borrow::Cow;
 use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Where in an input a format error was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,10 +64,10 @@ pub enum GeomError {
         per: &'static str,
     },
     /// The input is too small or otherwise unusable for the requested operation.
-    #[error("invalid input: {0}")]
+    #[error("invalid input: {}", escape_control(.0))]
     InvalidInput(String),
     /// A parameter value is out of its valid range.
-    #[error("parameter '{name}': {message}")]
+    #[error("parameter '{name}': {}", escape_control(message))]
     InvalidParameter {
         /// Parameter name as the user spells it.
         name: &'static str,
@@ -83,7 +84,7 @@ pub enum GeomError {
         cols: usize,
     },
     /// A file could not be parsed.
-    #[error("{}: {location}: {message}", path.display())]
+    #[error("{}: {location}: {}", Shown(path), escape_control(message))]
     Format {
         /// The file (or a placeholder such as `<memory>` for in-memory input).
         path: PathBuf,
@@ -93,7 +94,7 @@ pub enum GeomError {
         message: String,
     },
     /// The file format could not be determined or is not supported for this operation.
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {}", Shown(path), escape_control(message))]
     UnsupportedFormat {
         /// The file.
         path: PathBuf,
@@ -101,7 +102,7 @@ pub enum GeomError {
         message: String,
     },
     /// An operating-system I/O error, with the file it concerns.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", Shown(path))]
     Io {
         /// The file.
         path: PathBuf,
@@ -109,6 +110,51 @@ pub enum GeomError {
         #[source]
         source: std::io::Error,
     },
+}
+
+/// Text for an error message with every character that could corrupt a terminal or a
+/// one-line log rendered visibly: ASCII control bytes (NUL, ESC, line breaks, tabs, DEL)
+/// as `\x00`, `\x1b`, ...; other Unicode control and invisible formatting characters
+/// (C1 controls, zero-width and bidirectional marks, BOM) as `\u{200b}`, ... Everything
+/// else, backslashes included, is kept, so escaping twice changes nothing. Used for every
+/// message that quotes file content or a file name: hostile input must not be able to
+/// split a message into lines or send escape sequences to the user's terminal.
+pub fn escape_control(s: &str) -> Cow<'_, str> {
+    if !s.chars().any(needs_escape) {
+        return Cow::Borrowed(s);
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        if !needs_escape(c) {
+            out.push(c);
+        } else if c.is_ascii() {
+            out.push_str(&format!("\\x{:02x}", c as u32));
+        } else {
+            out.push_str(&format!("\\u{{{:x}}}", c as u32));
+        }
+    }
+    Cow::Owned(out)
+}
+
+/// True for the characters [`escape_control`] renders as an escape.
+fn needs_escape(c: char) -> bool {
+    c.is_control()
+        || matches!(
+            c,
+            '\u{200b}'..='\u{200f}'
+                | '\u{2028}'..='\u{202e}'
+                | '\u{2060}'..='\u{2069}'
+                | '\u{feff}'
+        )
+}
+
+/// A path in an error message, with control characters escaped (see [`escape_control`]).
+struct Shown<'a>(&'a Path);
+
+impl fmt::Display for Shown<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&escape_control(&self.0.to_string_lossy()))
+    }
 }
 
 /// Result alias of this crate.
@@ -142,5 +188,43 @@ pub(crate) fn check_len(
             expected,
             per,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escape_control_renders_control_and_invisible_characters() {
+        assert_eq!(
+            escape_control("a\0b\x1b[31m\n\t\x7f"),
+            "a\\x00b\\x1b[31m\\x0a\\x09\\x7f"
+        );
+        assert_eq!(
+            escape_control("x\u{85}y\u{202e}z\u{feff}"),
+            "x\\u{85}y\\u{202e}z\\u{feff}"
+        );
+        assert!(matches!(
+            escape_control("plain 'ok' é \\x00"),
+            Cow::Borrowed(_)
+        ));
+        let once = escape_control("\0\u{1b}").into_owned();
+        assert_eq!(escape_control(&once), once, "escaping is idempotent");
+    }
+
+    #[test]
+    fn format_errors_escape_the_path_and_the_message() {
+        let e = GeomError::Format {
+            path: PathBuf::from("evil\u{1b}]0;x\u{7}.ply"),
+            location: Location::Line(1),
+            message: "found '\0\r\n'".into(),
+        };
+        let text = e.to_string();
+        assert!(!text.chars().any(needs_escape), "{text:?}");
+        assert_eq!(
+            text,
+            "evil\\x1b]0;x\\x07.ply: line 1: found '\\x00\\x0d\\x0a'"
+        );
     }
 }

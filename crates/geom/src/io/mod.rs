@@ -10,7 +10,13 @@
 //! counts, non-numeric tokens, out-of-range face indices, non-finite coordinates, ...)
 //! yields [`GeomError::Format`] naming the file, the line or byte offset, what was found
 //! and what was expected. A file is never read partially without an error, and counts
-//! declared in headers never drive an allocation larger than the file could justify.
+//! declared in headers never drive an allocation larger than the file could justify:
+//! files are loaded within bounds taken from the file itself (its size, a line length
+//! limit, the stream limit; see [`MAX_STREAM_BYTES`], [`MAX_LINE_BYTES`],
+//! [`MAX_PLY_HEADER_BYTES`]), and a count the file cannot hold is an error naming the
+//! count and the bytes left. Messages escape control characters of the file
+//! ([`crate::error::escape_control`]), and float colours outside 0..1 are refused, never
+//! clamped.
 //!
 //! What each format stores:
 //!
@@ -30,18 +36,22 @@
 //! with [`read_ply_comments`]), e.g. the provenance of a generated cloud; the other
 //! formats have no such place, and writing to them drops the comments.
 
+use std::borrow::Cow;
 use std::fmt;
-use std::fs::{self, File};
-use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::Path;
 use std::str::FromStr;
 
 use glam::DVec3;
 
 use crate::cloud::{Channel, PointCloud};
-use crate::error::{GeomError, Location, Result};
+use crate::error::{GeomError, Location, Result, escape_control};
 use crate::mesh::TriMesh;
 
+pub use input::{MAX_LINE_BYTES, MAX_PLY_HEADER_BYTES, MAX_STREAM_BYTES};
+
+mod input;
 mod m;
 mod obj;
 mod off;
@@ -244,7 +254,7 @@ pub fn read_cloud(path: impl AsRef<Path>) -> Result<PointCloud> {
 /// Reads a point cloud in the given format, whatever the extension.
 pub fn read_cloud_as(path: impl AsRef<Path>, format: Format) -> Result<PointCloud> {
     let path = path.as_ref();
-    let bytes = read_file(path)?;
+    let bytes = input::read_input(path, format)?;
     cloud_from_bytes(&bytes, format, path)
 }
 
@@ -258,7 +268,7 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<TriMesh> {
 /// Reads a triangle mesh in the given format, whatever the extension.
 pub fn read_mesh_as(path: impl AsRef<Path>, format: Format) -> Result<TriMesh> {
     let path = path.as_ref();
-    let bytes = read_file(path)?;
+    let bytes = input::read_input(path, format)?;
     mesh_from_bytes(&bytes, format, path)
 }
 
@@ -308,7 +318,7 @@ pub fn read_any(path: impl AsRef<Path>) -> Result<Loaded> {
 /// [`read_any`] in the given format, whatever the extension.
 pub fn read_any_as(path: impl AsRef<Path>, format: Format) -> Result<Loaded> {
     let path = path.as_ref();
-    let bytes = read_file(path)?;
+    let bytes = input::read_input(path, format)?;
     any_from_bytes(&bytes, format, path)
 }
 
@@ -409,19 +419,7 @@ pub fn cloud_to_bytes_with_comments(
 /// one separating space). Reads and checks the header only, not the data after it.
 pub fn read_ply_comments(path: impl AsRef<Path>) -> Result<Vec<String>> {
     let path = path.as_ref();
-    let file = File::open(path).map_err(io_err(path))?;
-    let mut r = BufReader::new(file);
-    let mut header = Vec::new();
-    loop {
-        let start = header.len();
-        if r.read_until(b'\n', &mut header).map_err(io_err(path))? == 0 {
-            break;
-        }
-        let line = header[start..].trim_ascii();
-        if line == b"end_header" || (start == 0 && line != b"ply") {
-            break;
-        }
-    }
+    let header = input::read_ply_header(path)?;
     ply_comments_from_bytes(&header, path)
 }
 
@@ -466,20 +464,18 @@ pub fn mesh_to_bytes(mesh: &TriMesh, format: Format, options: &WriteOptions) -> 
 /// Placeholder path for errors of in-memory encoding.
 const MEMORY: &str = "<memory>";
 
-/// A [`GeomError::Format`] for `path`.
+/// A [`GeomError::Format`] for `path`. The message is stored with control characters
+/// escaped ([`escape_control`]): messages quote file content, which may be hostile.
 pub(crate) fn format_err(path: &Path, location: Location, message: impl Into<String>) -> GeomError {
+    let message = message.into();
     GeomError::Format {
         path: path.to_path_buf(),
         location,
-        message: message.into(),
+        message: match escape_control(&message) {
+            Cow::Borrowed(_) => message,
+            Cow::Owned(escaped) => escaped,
+        },
     }
-}
-
-fn read_file(path: &Path) -> Result<Vec<u8>> {
-    fs::read(path).map_err(|source| GeomError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 fn io_err(path: &Path) -> impl Fn(std::io::Error) -> GeomError + '_ {

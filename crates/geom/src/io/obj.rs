@@ -11,7 +11,10 @@
 //! (what reconbench writes, also for clouds without faces), or else when every vertex is
 //! referenced with a normal (the first reference wins). Otherwise they are dropped.
 //! Vertex colours use the common `v x y z r g b` extension (components in 0..1); they are
-//! kept when every vertex has one.
+//! kept when every vertex has one. A component outside 0..1 is an error naming the line
+//! and the value, not clamped: files with 0..255 components exist, and clamping would
+//! turn them white without a word; such a file is refused with the advice to divide by
+//! 255.
 
 use std::io::{self, Write};
 use std::path::Path;
@@ -164,8 +167,18 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed> {
                 match k {
                     3 | 4 => {}
                     6 => {
+                        let mut c = [0u8; 3];
+                        for (slot, &v) in c.iter_mut().zip(&vals[3..6]) {
+                            *slot = unit_to_u8(v).map_err(|m| {
+                                err(format!(
+                                    "vertex {}: {m} (OBJ vertex colours 'v x y z r g b' are \
+                                     0..1; divide 0..255 colours by 255)",
+                                    positions.len() + 1
+                                ))
+                            })?;
+                        }
                         if colors.len() == positions.len() {
-                            colors.push([vals[3], vals[4], vals[5]].map(unit_to_u8));
+                            colors.push(c);
                         }
                     }
                     _ => {

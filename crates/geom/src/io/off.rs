@@ -72,6 +72,26 @@ fn parse_keyword(kw: &str) -> Option<std::result::Result<Variant, String>> {
     rest.is_empty().then_some(Ok(v))
 }
 
+/// Refuses counts the rest of the file cannot hold, before any record is read: every
+/// record is a line of at least two bytes. (A tighter bound, from the values per line,
+/// would preempt the more precise error of the first short record for files that are a
+/// few bytes short.)
+fn check_counts(recs: &Records, line: usize, nv: usize, nf: usize) -> Result<()> {
+    let left = recs.lines.remaining() as u128;
+    let need = ((nv as u128 + nf as u128) * 2).saturating_sub(1);
+    if need > left {
+        return Err(format_err(
+            recs.path,
+            Location::Line(line),
+            format!(
+                "the counts line declares {nv} vertices and {nf} faces, at least {need} bytes, \
+                 but only {left} bytes follow; the file is truncated or the counts are wrong"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed> {
     let mut recs = Records {
         path,
@@ -123,12 +143,13 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed> {
         parse_count(path, nc, ne, "the edge count")?;
     }
 
+    let fixed = 3 + if variant.normal { 3 } else { 0 } + if variant.texture { 2 } else { 0 };
+    check_counts(&recs, nc, nv, nf)?;
     // Each record takes at least two bytes, whatever the counts claim.
     let bound = bytes.len() / 2 + 1;
     let mut positions = Vec::with_capacity(nv.min(bound));
     let mut normals = variant.normal.then(|| Vec::with_capacity(nv.min(bound)));
     let mut colors = variant.color.then(|| Vec::with_capacity(nv.min(bound)));
-    let fixed = 3 + if variant.normal { 3 } else { 0 } + if variant.texture { 2 } else { 0 };
     let expected = || {
         let mut s = String::from("x y z");
         if variant.normal {

@@ -353,6 +353,145 @@ pub(crate) fn header_comments(bytes: &[u8], path: &Path) -> Result<Vec<String>> 
     parse_header(bytes, path).map(|h| h.comments)
 }
 
+/// How far a buffer holds a PLY header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum HeaderEnd {
+    /// The header ends with its `end_header` line; the body starts at this offset.
+    Found(usize),
+    /// The first line is not `ply`: no point reading further.
+    NotPly,
+    /// No `end_header` line yet.
+    Incomplete,
+}
+
+/// Finds the end of the header in the start of a PLY file (only lines ended by a line
+/// break count, since more bytes may follow).
+pub(crate) fn header_end(bytes: &[u8]) -> HeaderEnd {
+    let first = bytes.trim_ascii_start();
+    if first.len() >= 3 && !first.starts_with(b"ply") {
+        return HeaderEnd::NotPly;
+    }
+    let mut start = 0;
+    while let Some(i) = bytes[start..].iter().position(|&b| b == b'\n') {
+        let line = bytes[start..start + i].trim_ascii();
+        let next = start + i + 1;
+        if start == 0 && line != b"ply" {
+            return HeaderEnd::NotPly;
+        }
+        if line == b"end_header" {
+            return HeaderEnd::Found(next);
+        }
+        start = next;
+    }
+    HeaderEnd::Incomplete
+}
+
+/// What a binary body must hold, from the header alone.
+#[derive(Debug)]
+pub(crate) struct BodyNeeds {
+    /// Per element: name, record count, smallest record size in bytes.
+    elements: Vec<(String, usize, usize)>,
+    /// Every record has a fixed size (no lists): the body size is known exactly.
+    pub exact: bool,
+    /// Byte offset of the body.
+    body: usize,
+}
+
+impl BodyNeeds {
+    /// Fewest bytes the body can have.
+    pub fn min_bytes(&self) -> u64 {
+        let total: u128 = self
+            .elements
+            .iter()
+            .map(|&(_, count, min)| count as u128 * min as u128)
+            .sum();
+        u64::try_from(total).unwrap_or(u64::MAX)
+    }
+
+    /// Refuses a header whose counts need more than the `avail` bytes after the header
+    /// (the rest of a regular file, or what the stream limit leaves), naming the first
+    /// element that does not fit, its count and the bytes left for it.
+    pub fn check(&self, avail: u64, stream: bool, path: &Path) -> Result<()> {
+        let mut used: u128 = 0;
+        for (name, count, min) in &self.elements {
+            let need = *count as u128 * *min as u128;
+            if used + need > avail as u128 {
+                let left = avail as u128 - used;
+                let before = if used > 0 {
+                    " and the elements before it"
+                } else {
+                    ""
+                };
+                let place = if stream {
+                    format!(
+                        "within the {} bytes read from a stream (not a regular file)",
+                        super::MAX_STREAM_BYTES
+                    )
+                } else {
+                    "in the file".to_string()
+                };
+                return Err(format_err(
+                    path,
+                    Location::Byte(self.body as u64 + used as u64),
+                    format!(
+                        "element '{name}' declares {count} records of {}{min} bytes \
+                         ({need} bytes), but only {left} bytes remain after the header{before} \
+                         {place}; the file is truncated or the count is wrong",
+                        if self.exact { "" } else { "at least " },
+                    ),
+                ));
+            }
+            used += need;
+        }
+        Ok(())
+    }
+
+    /// For a body of fixed-size records, refuses bytes after the last record before the
+    /// body is parsed (`avail` bytes follow the header; of a stream, only the first byte
+    /// after the records is read, so the message says "at least").
+    pub fn check_no_trailing(&self, avail: u64, stream: bool, path: &Path) -> Result<()> {
+        let need = self.min_bytes();
+        if avail > need {
+            let last = self.elements.last().map_or("(none)", |e| e.0.as_str());
+            let extra = if stream {
+                format!("at least {}", avail - need)
+            } else {
+                (avail - need).to_string()
+            };
+            return Err(format_err(
+                path,
+                Location::Byte(self.body as u64 + need),
+                format!(
+                    "found {extra} bytes after the last record of element '{last}'; expected \
+                     the end of the file (the header's element counts may be too small)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Parses a complete header and returns what its binary body must hold; `None` for an
+/// ascii body.
+pub(crate) fn body_needs(header: &[u8], path: &Path) -> Result<Option<BodyNeeds>> {
+    let h = parse_header(header, path)?;
+    if h.encoding == PlyEncoding::Ascii {
+        return Ok(None);
+    }
+    Ok(Some(BodyNeeds {
+        body: h.body,
+        exact: h.elements.iter().all(|e| e.fixed_binary_size().is_some()),
+        elements: h
+            .elements
+            .into_iter()
+            .map(|e| {
+                let min = e.min_binary_size();
+                (e.name, e.count, min)
+            })
+            .collect(),
+    }))
+}
+
 // ---------------------------------------------------------------------------------------
 // Value sources.
 
@@ -482,9 +621,23 @@ impl Source for AsciiSource<'_> {
     }
 
     fn start_element(&mut self, el: &Element) -> Result<usize> {
-        // Every record needs at least one character and a separator per property.
+        // Every record is a line with at least one character and a separator per
+        // property (the last line may lack its line break).
         let left = self.lines.remaining();
-        Ok(el.count.min(left / (2 * el.props.len().max(1)) + 1))
+        let per = 2 * el.props.len().max(1);
+        let need = (el.count as u128 * per as u128).saturating_sub(1);
+        if need > left as u128 {
+            self.line = self.lines.line_number() + 1;
+            return Err(self.err(format!(
+                "element '{}' declares {} records of {} properties, at least {need} bytes \
+                 as ascii, but only {left} bytes remain; the file is truncated or the count \
+                 is wrong",
+                el.name,
+                el.count,
+                el.props.len()
+            )));
+        }
+        Ok(el.count.min(left / per + 1))
     }
 
     fn skip_element(&mut self, _el: &Element) -> Result<bool> {
@@ -604,10 +757,15 @@ impl Source for BinarySource<'_> {
             return Err(self.err(
                 self.pos,
                 format!(
-                    "element '{}' declares {} records of at least {min} bytes ({need} bytes), \
+                    "element '{}' declares {} records of {}{min} bytes ({need} bytes), \
                      but only {} bytes remain; the file is truncated or the count is wrong",
                     el.name,
                     el.count,
+                    if el.fixed_binary_size().is_some() {
+                        ""
+                    } else {
+                        "at least "
+                    },
                     self.left()
                 ),
             ));
@@ -820,7 +978,7 @@ fn skip_element<S: Source>(src: &mut S, el: &Element, path: &Path) -> Result<()>
 
 fn to_color(v: Val, ty: Ty) -> std::result::Result<u8, String> {
     match (v, ty) {
-        (Val::F(f), _) if f.is_finite() => Ok(super::text::unit_to_u8(f)),
+        (Val::F(f), _) if f.is_finite() => super::text::unit_to_u8(f),
         (Val::F(f), _) => Err(format!("colour component {f} is not finite")),
         // 16-bit colours are scaled down; other integer types must already be 0..=255.
         (Val::I(i), Ty::U16) => Ok(((i as f64) / 257.0).round() as u8),

@@ -83,14 +83,50 @@ fn is_text(bytes: &[u8]) -> bool {
         .all(|&b| b >= 0x20 || matches!(b, b'\t' | b'\n' | b'\r' | 0x0c))
 }
 
+/// Bytes before the first triangle of a binary file: the header and the count.
+pub(crate) const PREFIX: usize = HEADER + 4;
+
+/// The triangle count of a binary file, if there are enough bytes to hold one.
+pub(crate) fn declared_triangles(bytes: &[u8]) -> Option<u64> {
+    let b = bytes.get(HEADER..PREFIX)?;
+    Some(u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+}
+
+/// Size of a binary file of `n` triangles.
+pub(crate) fn binary_size(n: u64) -> u64 {
+    PREFIX as u64 + RECORD as u64 * n
+}
+
+/// True when the file starts with `solid` (after white space), as ascii STL does; judged
+/// from its first bytes, which may all be white space.
+pub(crate) fn may_be_ascii(start: &[u8]) -> bool {
+    let t = start.trim_ascii_start();
+    t.len() < 5 || t[..5].eq_ignore_ascii_case(b"solid")
+}
+
+/// The error for a file that is not binary STL of the size its count declares, and not
+/// ascii STL either (`len` is the file size).
+pub(crate) fn size_error(n: u64, len: u64, starts_solid: bool, path: &Path) -> GeomError {
+    let hint = if starts_solid {
+        " (it starts with 'solid' like ascii STL, but contains binary data)"
+    } else {
+        " (and it does not start with 'solid' as ascii STL does)"
+    };
+    format_err(
+        path,
+        Location::Byte(HEADER as u64),
+        format!(
+            "binary STL header declares {n} triangles, which take {} bytes, but the file \
+             has {len} bytes{hint}",
+            binary_size(n)
+        ),
+    )
+}
+
 pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed> {
-    let declared = (bytes.len() >= HEADER + 4).then(|| {
-        let mut a = [0u8; 4];
-        a.copy_from_slice(&bytes[HEADER..HEADER + 4]);
-        u32::from_le_bytes(a) as u64
-    });
+    let declared = declared_triangles(bytes);
     if let Some(n) = declared
-        && (HEADER + 4) as u64 + RECORD as u64 * n == bytes.len() as u64
+        && binary_size(n) == bytes.len() as u64
     {
         return parse_binary(bytes, n as usize, path);
     }
@@ -101,31 +137,22 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<Parsed> {
     if starts_solid && is_text(bytes) {
         return parse_ascii(bytes, path);
     }
-    let hint = if starts_solid {
-        " (it starts with 'solid' like ascii STL, but contains binary data)"
-    } else {
-        " (and it does not start with 'solid' as ascii STL does)"
-    };
     Err(match declared {
         None => format_err(
             path,
             Location::File,
             format!(
                 "the file has {} bytes; a binary STL needs at least 84 (an 80-byte header and \
-                 a triangle count){hint}",
-                bytes.len()
+                 a triangle count){}",
+                bytes.len(),
+                if starts_solid {
+                    " (it starts with 'solid' like ascii STL, but contains binary data)"
+                } else {
+                    " (and it does not start with 'solid' as ascii STL does)"
+                }
             ),
         ),
-        Some(n) => format_err(
-            path,
-            Location::Byte(HEADER as u64),
-            format!(
-                "binary STL header declares {n} triangles, which take {} bytes, but the file \
-                 has {} bytes{hint}",
-                (HEADER + 4) as u64 + RECORD as u64 * n,
-                bytes.len()
-            ),
-        ),
+        Some(n) => size_error(n, bytes.len() as u64, starts_solid, path),
     })
 }
 

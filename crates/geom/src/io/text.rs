@@ -154,11 +154,12 @@ pub(crate) fn parse_count(path: &Path, line: usize, tok: &str, what: &str) -> Re
 }
 
 /// Converts a colour component given either as an integer 0..=255 or as a float in
-/// 0..=1 (the latter recognised by a `.` or exponent in the token).
+/// 0..=1 (the latter recognised by a `.` or exponent in the token); a float outside 0..=1
+/// is an error, not clamped.
 pub(crate) fn parse_color(path: &Path, line: usize, tok: &str) -> Result<u8> {
     if tok.contains(['.', 'e', 'E']) {
         let v = parse_finite(path, line, tok, "a colour component")?;
-        Ok(unit_to_u8(v))
+        unit_to_u8(v).map_err(|m| format_err(path, Location::Line(line), m))
     } else {
         let v = parse_i64(path, line, tok, "a colour component")?;
         u8::try_from(v).map_err(|_| {
@@ -171,9 +172,17 @@ pub(crate) fn parse_color(path: &Path, line: usize, tok: &str) -> Result<u8> {
     }
 }
 
-/// Maps a colour component in 0..=1 (clamped) to 0..=255.
-pub(crate) fn unit_to_u8(v: f64) -> u8 {
-    (v.clamp(0.0, 1.0) * 255.0).round() as u8
+/// Maps a colour component in 0..=1 to 0..=255. A value outside 0..=1 (or NaN) is an
+/// error naming it: clamping would silently change the colours of a file written on
+/// another scale (0..255 integers written as floats, say).
+pub(crate) fn unit_to_u8(v: f64) -> std::result::Result<u8, String> {
+    if (0.0..=1.0).contains(&v) {
+        Ok((v * 255.0).round() as u8)
+    } else {
+        Err(format!(
+            "colour component {v} is outside 0..1; expected a float colour in 0..1"
+        ))
+    }
 }
 
 /// Formats an `f64` with the shortest digits that parse back to the same value (at most
