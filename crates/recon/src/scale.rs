@@ -9,7 +9,8 @@
 //! under the faces ([`on_input_points`]).
 
 use glam::DVec3;
-use reconbench_geom::method::MethodError;
+use reconbench_geom::cloud::scale_pow2;
+use reconbench_geom::method::{MethodError, Reconstruction};
 use reconbench_geom::{PointCloud, TriMesh};
 
 /// The cloud to run on: the working-scale copy when one was made, else the input.
@@ -33,6 +34,32 @@ pub fn on_input_points(mesh: TriMesh, input: &[DVec3]) -> Result<TriMesh, Method
         Some(n) => out.with_vertex_normals(n)?,
         None => out,
     })
+}
+
+/// Runs `f` on the working-scale copy of `cloud` (or on `cloud` itself when it is
+/// already in range), refuses an empty result on non-collinear points, and multiplies
+/// the mesh vertices back by `2^-s` (exact, so vertices that are input points come back
+/// bit for bit whenever the forward move was exact: always, unless coordinates more than
+/// about 2^1000 below the largest lost low bits).
+pub fn reconstruct_at_working_scale(
+    name: &str,
+    cloud: &PointCloud,
+    f: impl FnOnce(&PointCloud) -> Result<Reconstruction, MethodError>,
+) -> Result<Reconstruction, MethodError> {
+    let scaled = cloud.at_working_scale();
+    let work = working(cloud, &scaled);
+    let mut r = f(work)?;
+    check_not_collapsed(name, &r.mesh, work.positions())?;
+    if let Some((_, s)) = scaled {
+        let normals = r.mesh.vertex_normals().map(<[DVec3]>::to_vec);
+        let v = scale_pow2(r.mesh.vertices(), -s);
+        let mesh = TriMesh::new(v, r.mesh.faces().to_vec())?;
+        r.mesh = match normals {
+            Some(n) => mesh.with_vertex_normals(n)?,
+            None => mesh,
+        };
+    }
+    Ok(r)
 }
 
 /// Fails when `mesh` has no face although `points` hold three non-collinear points: a

@@ -322,17 +322,19 @@ impl Reconstructor for Cocone {
         cloud: &PointCloud,
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
-        let p = &self.params;
-        let mut d = Diagnostics::new();
-        let (dt, _, tris) = delaunay_and_surface(
-            Self::NAME,
-            cloud,
-            (p.theta_deg, p.sharp_deg, p.prune_dangling),
-            ctx,
-            &mut d,
-        )?;
-        let tris: Vec<[u32; 3]> = tris.into_iter().map(|(_, t)| t).collect();
-        finish(cloud, &dt, &tris, d, ctx)
+        crate::scale::reconstruct_at_working_scale(Self::NAME, cloud, |cloud| {
+            let p = &self.params;
+            let mut d = Diagnostics::new();
+            let (dt, _, tris) = delaunay_and_surface(
+                Self::NAME,
+                cloud,
+                (p.theta_deg, p.sharp_deg, p.prune_dangling),
+                ctx,
+                &mut d,
+            )?;
+            let tris: Vec<[u32; 3]> = tris.into_iter().map(|(_, t)| t).collect();
+            finish(cloud, &dt, &tris, d, ctx)
+        })
     }
 }
 
@@ -346,62 +348,64 @@ impl Reconstructor for TightCocone {
         cloud: &PointCloud,
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
-        let p = &self.params;
-        let mut d = Diagnostics::new();
-        let (dt, poles, initial) = delaunay_and_surface(
-            Self::NAME,
-            cloud,
-            (p.theta_deg, p.sharp_deg, p.prune_dangling),
-            ctx,
-            &mut d,
-        )?;
-        ctx.checkpoint()?;
-        let g = ctx.phase_guard("good_samples");
-        let triples: Vec<[u32; 3]> = initial.iter().map(|&(_, t)| t).collect();
-        let good = tight::good_samples(dt.n_vertices(), &triples);
-        drop(g);
-        let g = ctx.phase_guard("mark");
-        // ASSUMPTION K-05: the trusted surface triangles.
-        let surface: Vec<u32> = initial
-            .iter()
-            .filter(|(_, t)| match p.surface {
-                SurfaceRule::OneGood => t.iter().any(|&v| good[v as usize]),
-                SurfaceRule::AllGood => t.iter().all(|&v| good[v as usize]),
-            })
-            .map(|&(f, _)| f)
-            .collect();
-        let mut stats = tight::MarkStats {
-            good: good.iter().filter(|&&g| g).count(),
-            ..Default::default()
-        };
-        let mut inside = tight::label(&dt, &poles, &surface, &good, &mut stats);
-        drop(g);
-        // ASSUMPTION K-08 (deviation): small pockets are relabelled first.
-        let pockets = ctx.phase("pockets", || {
-            repair::drop_pockets(&dt, &mut inside, p.pocket_share)
-        });
-        // ASSUMPTION K-07 (deviation): then non-manifold spots.
-        let (rep, tris) = ctx.phase("repair", || {
-            repair::repair(&dt, &mut inside, p.repair_rounds)
-        });
-        num(&mut d, "pocket_tets", pockets as f64);
-        num(&mut d, "repair_rounds", rep.rounds as f64);
-        num(&mut d, "repair_flipped_tets", rep.flipped as f64);
-        num(&mut d, "initial_triangles", initial.len() as f64);
-        num(&mut d, "good_samples", stats.good as f64);
-        num(
-            &mut d,
-            "poor_samples",
-            (dt.n_vertices() - stats.good) as f64,
-        );
-        num(&mut d, "inside_tets", stats.inside as f64);
-        num(&mut d, "ball_tests", stats.ball_tests as f64);
-        if let Some(Diagnostic::Text(a)) = d.get_mut("assumptions") {
-            a.push_str(&format!(
-                " K-05=surface:{:?} K-06=certain-first,ball-angle K-07=repair:{} K-08=pockets:{}",
-                p.surface, p.repair_rounds, p.pocket_share
-            ));
-        }
-        finish(cloud, &dt, &tris, d, ctx)
+        crate::scale::reconstruct_at_working_scale(Self::NAME, cloud, |cloud| {
+            let p = &self.params;
+            let mut d = Diagnostics::new();
+            let (dt, poles, initial) = delaunay_and_surface(
+                Self::NAME,
+                cloud,
+                (p.theta_deg, p.sharp_deg, p.prune_dangling),
+                ctx,
+                &mut d,
+            )?;
+            ctx.checkpoint()?;
+            let g = ctx.phase_guard("good_samples");
+            let triples: Vec<[u32; 3]> = initial.iter().map(|&(_, t)| t).collect();
+            let good = tight::good_samples(dt.n_vertices(), &triples);
+            drop(g);
+            let g = ctx.phase_guard("mark");
+            // ASSUMPTION K-05: the trusted surface triangles.
+            let surface: Vec<u32> = initial
+                .iter()
+                .filter(|(_, t)| match p.surface {
+                    SurfaceRule::OneGood => t.iter().any(|&v| good[v as usize]),
+                    SurfaceRule::AllGood => t.iter().all(|&v| good[v as usize]),
+                })
+                .map(|&(f, _)| f)
+                .collect();
+            let mut stats = tight::MarkStats {
+                good: good.iter().filter(|&&g| g).count(),
+                ..Default::default()
+            };
+            let mut inside = tight::label(&dt, &poles, &surface, &good, &mut stats);
+            drop(g);
+            // ASSUMPTION K-08 (deviation): small pockets are relabelled first.
+            let pockets = ctx.phase("pockets", || {
+                repair::drop_pockets(&dt, &mut inside, p.pocket_share)
+            });
+            // ASSUMPTION K-07 (deviation): then non-manifold spots.
+            let (rep, tris) = ctx.phase("repair", || {
+                repair::repair(&dt, &mut inside, p.repair_rounds)
+            });
+            num(&mut d, "pocket_tets", pockets as f64);
+            num(&mut d, "repair_rounds", rep.rounds as f64);
+            num(&mut d, "repair_flipped_tets", rep.flipped as f64);
+            num(&mut d, "initial_triangles", initial.len() as f64);
+            num(&mut d, "good_samples", stats.good as f64);
+            num(
+                &mut d,
+                "poor_samples",
+                (dt.n_vertices() - stats.good) as f64,
+            );
+            num(&mut d, "inside_tets", stats.inside as f64);
+            num(&mut d, "ball_tests", stats.ball_tests as f64);
+            if let Some(Diagnostic::Text(a)) = d.get_mut("assumptions") {
+                a.push_str(&format!(
+                    " K-05=surface:{:?} K-06=certain-first,ball-angle K-07=repair:{} K-08=pockets:{}",
+                    p.surface, p.repair_rounds, p.pocket_share
+                ));
+            }
+            finish(cloud, &dt, &tris, d, ctx)
+        })
     }
 }

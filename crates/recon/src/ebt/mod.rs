@@ -218,110 +218,112 @@ impl Reconstructor for Ebt {
         cloud: &PointCloud,
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
-        let p = &self.params;
-        p.validate()?;
-        let tp = p.thinning();
-        let t = thin(cloud, &tp, ctx)?;
-        let pts = cloud.positions();
-        let q: Vec<DVec3> = t.kept.iter().map(|&i| pts[i as usize]).collect();
-        let seed = if p.seed_point >= 0 {
-            let s = p.seed_point as usize;
-            if s >= pts.len() {
-                return Err(MethodError::InvalidParameter {
-                    name: "seed_point".into(),
-                    message: format!("index {s} is outside the {} input points", pts.len()),
-                });
-            }
-            // A user seed that binning dropped: the kept point nearest to it.
-            Some(grow::default_seed_near(&q, pts[s]))
-        } else {
-            None
-        };
-        let theta = p.min_angle_deg.to_radians();
-        let opts = grow::GrowOpts {
-            omega: t.omega,
-            min_angle: theta,
-            ear_filling: p.ear_filling,
-            ear_angle: p.ear_angle_deg.to_radians(),
-            wake_deferred: p.wake_deferred,
-            seed,
-        };
-        let grown = {
-            let _g = ctx.phase_guard("mesh");
-            let c = &*ctx;
-            grow::grow(&q, &opts, &mut || c.checkpoint())?
-        };
-        let mut faces = grown.faces;
-        let mut d = Diagnostics::new();
-        thinning_diagnostics(&t, &tp, &mut d);
-        let num = |d: &mut Diagnostics, k: &str, v: f64| {
-            d.insert(k.to_string(), Diagnostic::Number(v));
-        };
-        let before = validate::bad_facets(&q, &faces, t.omega, theta)?;
-        if p.feature_align || p.equilateral {
-            let _g = ctx.phase_guard("enhance");
-            let eps = p.epsilon * t.diag;
-            let cfg = enhance::SwapCfg {
+        crate::scale::reconstruct_at_working_scale(Self::NAME, cloud, |cloud| {
+            let p = &self.params;
+            p.validate()?;
+            let tp = p.thinning();
+            let t = thin(cloud, &tp, ctx)?;
+            let pts = cloud.positions();
+            let q: Vec<DVec3> = t.kept.iter().map(|&i| pts[i as usize]).collect();
+            let seed = if p.seed_point >= 0 {
+                let s = p.seed_point as usize;
+                if s >= pts.len() {
+                    return Err(MethodError::InvalidParameter {
+                        name: "seed_point".into(),
+                        message: format!("index {s} is outside the {} input points", pts.len()),
+                    });
+                }
+                // A user seed that binning dropped: the kept point nearest to it.
+                Some(grow::default_seed_near(&q, pts[s]))
+            } else {
+                None
+            };
+            let theta = p.min_angle_deg.to_radians();
+            let opts = grow::GrowOpts {
                 omega: t.omega,
                 min_angle: theta,
-                eps,
-                feature_angle: p.feature_angle_deg.to_radians(),
+                ear_filling: p.ear_filling,
+                ear_angle: p.ear_angle_deg.to_radians(),
+                wake_deferred: p.wake_deferred,
+                seed,
             };
-            let st = enhance::enhance(&q, &mut faces, &cfg, p.feature_align, p.equilateral);
-            num(&mut d, "swaps_e21", st.feature_swaps as f64);
-            num(&mut d, "swaps_e20", st.equilateral_swaps as f64);
-            num(&mut d, "feature_edges", st.feature_edges as f64);
-            num(&mut d, "bad_facets_before_enhance", before.total as f64);
-        }
-        let bad = if p.feature_align || p.equilateral {
-            ctx.phase("validate", || {
-                validate::bad_facets(&q, &faces, t.omega, theta)
-            })?
-        } else {
-            before
-        };
-        num(&mut d, "bad_facets", bad.total as f64);
-        num(&mut d, "bad_r1_long_edge", bad.r1 as f64);
-        num(&mut d, "bad_r2_small_angle", bad.r2 as f64);
-        num(&mut d, "bad_r3_non_manifold", bad.r3 as f64);
-        num(&mut d, "bad_overlap", bad.overlap as f64);
-        let unmeshed: Vec<u32> = t
-            .kept
-            .iter()
-            .zip(&grown.meshed)
-            .filter(|(_, m)| !**m)
-            .map(|(&i, _)| i)
-            .collect();
-        num(&mut d, "meshed", (q.len() - unmeshed.len()) as f64);
-        num(&mut d, "unmeshed", unmeshed.len() as f64);
-        num(&mut d, "seed_point", f64::from(t.kept[grown.seed as usize]));
-        num(&mut d, "passes", grown.passes as f64);
-        num(&mut d, "ears", grown.ears as f64);
-        num(&mut d, "deferrals", grown.deferrals as f64);
-        let min_ang = faces
-            .iter()
-            .map(|f| geometry::min_angle(q[f[0] as usize], q[f[1] as usize], q[f[2] as usize]))
-            .fold(f64::INFINITY, f64::min);
-        if min_ang.is_finite() {
-            num(&mut d, "min_angle_deg", min_ang.to_degrees());
-        }
-        let mesh = TriMesh::new(q, faces)?;
-        if p.deviation {
-            let eps = p.epsilon * t.diag;
-            if let Some([mx, p99, rms, above]) =
-                ctx.phase("deviation", || deviation(pts, &mesh, eps))?
-            {
-                num(&mut d, "dev_max", mx / t.diag);
-                num(&mut d, "dev_p99", p99 / t.diag);
-                num(&mut d, "dev_rms", rms / t.diag);
-                num(&mut d, "dev_above_eps", above);
-                num(&mut d, "dev_max_over_eps", mx / eps);
+            let grown = {
+                let _g = ctx.phase_guard("mesh");
+                let c = &*ctx;
+                grow::grow(&q, &opts, &mut || c.checkpoint())?
+            };
+            let mut faces = grown.faces;
+            let mut d = Diagnostics::new();
+            thinning_diagnostics(&t, &tp, &mut d);
+            let num = |d: &mut Diagnostics, k: &str, v: f64| {
+                d.insert(k.to_string(), Diagnostic::Number(v));
+            };
+            let before = validate::bad_facets(&q, &faces, t.omega, theta)?;
+            if p.feature_align || p.equilateral {
+                let _g = ctx.phase_guard("enhance");
+                let eps = p.epsilon * t.diag;
+                let cfg = enhance::SwapCfg {
+                    omega: t.omega,
+                    min_angle: theta,
+                    eps,
+                    feature_angle: p.feature_angle_deg.to_radians(),
+                };
+                let st = enhance::enhance(&q, &mut faces, &cfg, p.feature_align, p.equilateral);
+                num(&mut d, "swaps_e21", st.feature_swaps as f64);
+                num(&mut d, "swaps_e20", st.equilateral_swaps as f64);
+                num(&mut d, "feature_edges", st.feature_edges as f64);
+                num(&mut d, "bad_facets_before_enhance", before.total as f64);
             }
-        }
-        Ok(Reconstruction {
-            mesh,
-            refused: unmeshed,
-            diagnostics: d,
+            let bad = if p.feature_align || p.equilateral {
+                ctx.phase("validate", || {
+                    validate::bad_facets(&q, &faces, t.omega, theta)
+                })?
+            } else {
+                before
+            };
+            num(&mut d, "bad_facets", bad.total as f64);
+            num(&mut d, "bad_r1_long_edge", bad.r1 as f64);
+            num(&mut d, "bad_r2_small_angle", bad.r2 as f64);
+            num(&mut d, "bad_r3_non_manifold", bad.r3 as f64);
+            num(&mut d, "bad_overlap", bad.overlap as f64);
+            let unmeshed: Vec<u32> = t
+                .kept
+                .iter()
+                .zip(&grown.meshed)
+                .filter(|(_, m)| !**m)
+                .map(|(&i, _)| i)
+                .collect();
+            num(&mut d, "meshed", (q.len() - unmeshed.len()) as f64);
+            num(&mut d, "unmeshed", unmeshed.len() as f64);
+            num(&mut d, "seed_point", f64::from(t.kept[grown.seed as usize]));
+            num(&mut d, "passes", grown.passes as f64);
+            num(&mut d, "ears", grown.ears as f64);
+            num(&mut d, "deferrals", grown.deferrals as f64);
+            let min_ang = faces
+                .iter()
+                .map(|f| geometry::min_angle(q[f[0] as usize], q[f[1] as usize], q[f[2] as usize]))
+                .fold(f64::INFINITY, f64::min);
+            if min_ang.is_finite() {
+                num(&mut d, "min_angle_deg", min_ang.to_degrees());
+            }
+            let mesh = TriMesh::new(q, faces)?;
+            if p.deviation {
+                let eps = p.epsilon * t.diag;
+                if let Some([mx, p99, rms, above]) =
+                    ctx.phase("deviation", || deviation(pts, &mesh, eps))?
+                {
+                    num(&mut d, "dev_max", mx / t.diag);
+                    num(&mut d, "dev_p99", p99 / t.diag);
+                    num(&mut d, "dev_rms", rms / t.diag);
+                    num(&mut d, "dev_above_eps", above);
+                    num(&mut d, "dev_max_over_eps", mx / eps);
+                }
+            }
+            Ok(Reconstruction {
+                mesh,
+                refused: unmeshed,
+                diagnostics: d,
+            })
         })
     }
 }

@@ -122,158 +122,160 @@ impl Reconstructor for HcIt {
         cloud: &PointCloud,
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
-        let p = &self.params;
-        p.validate()?;
-        let pts = cloud.positions();
-        let order = ctx.phase("sort", || sweep_order(pts));
-        check_input(pts, &order)?;
-        let spacing = mean_spacing(pts, 1)?;
-        let rho = p.rho * spacing;
-        // The engine works on the points relabelled by their sweep rank, so every tie
-        // it breaks by vertex id is broken by position: a shuffled input gives the same
-        // mesh (spec §6.7).
-        let sorted: Vec<DVec3> = order.iter().map(|&i| pts[i as usize]).collect();
-        // ASSUMPTION H2: a spatial index gives the same Lg sets as the paper's all-pairs
-        // distances: the points strictly within rho (strict <) processed before P.
-        let slab = slab_ids(&sorted, &p.slabs);
-        let (offs, idx) = {
-            let _g = ctx.phase_guard("neighbours");
-            let index = PointIndex::new(&sorted)?;
-            let table = index.radius_batch(&sorted, rho)?;
-            let mut offs = Vec::with_capacity(pts.len() + 1);
-            let mut idx = Vec::with_capacity(table.indices.len() / 2 + 1);
-            offs.push(0usize);
-            let r2 = rho * rho;
-            for i in 0..pts.len() {
-                for (&j, &d2) in table.indices(i).iter().zip(table.dist2(i)) {
-                    let (si, sj) = (slab[i], slab[j as usize]);
-                    let same = !p.portions || si == sj;
-                    if d2 < r2 && (j as usize) < i && si >= 0 && sj >= 0 && same {
-                        idx.push(j);
-                    }
-                }
-                offs.push(idx.len());
-            }
-            (offs, idx)
-        };
-        ctx.checkpoint()?;
-        let k = DVec3::from_array(p.reference).normalize();
-        let opts = engine::Opts {
-            rho,
-            theta: p.theta_rad,
-            psi: p.psi_rad,
-            k,
-            strict_rho: p.strict_rho,
-            edge_distance: p.edge_distance,
-            winner_scan: p.winner_scan,
-            neighbourhood: p.neighbourhood,
-            ear_max_edge: if p.ear_max_edge > 0.0 {
-                p.ear_max_edge * rho
-            } else {
-                f64::INFINITY
-            },
-            conflict_rule: p.conflict_rule,
-            flips: p.flips,
-        };
-        let out = {
-            let _g = ctx.phase_guard("triangulate");
-            let c = &*ctx;
-            let nbrs = |i: u32| &idx[offs[i as usize]..offs[i as usize + 1]];
-            let n_slabs = p.slabs.len().saturating_sub(1).max(1);
-            let runs: Vec<Vec<u32>> = if p.portions {
-                (0..n_slabs as i32)
-                    .map(|k| {
-                        (0..pts.len() as u32)
-                            .filter(|&r| slab[r as usize] == k)
-                            .collect()
-                    })
-                    .collect()
-            } else {
-                vec![
-                    (0..pts.len() as u32)
-                        .filter(|&r| slab[r as usize] >= 0)
-                        .collect(),
-                ]
-            };
-            let mut out: Option<engine::Outcome> = None;
-            for ranks in &runs {
-                let o = engine::run(&sorted, ranks, nbrs, &opts, &mut || c.checkpoint())?;
-                out = Some(match out {
-                    None => o,
-                    // ASSUMPTION H15: concatenate the portions' meshes; they share no
-                    // vertex (each point is in one slab), so seams stay open.
-                    Some(mut acc) => {
-                        for &r in ranks {
-                            acc.nc[r as usize] = o.nc[r as usize];
-                            acc.sm[r as usize] = o.sm[r as usize];
+        crate::scale::reconstruct_at_working_scale(Self::NAME, cloud, |cloud| {
+            let p = &self.params;
+            p.validate()?;
+            let pts = cloud.positions();
+            let order = ctx.phase("sort", || sweep_order(pts));
+            check_input(pts, &order)?;
+            let spacing = mean_spacing(pts, 1)?;
+            let rho = p.rho * spacing;
+            // The engine works on the points relabelled by their sweep rank, so every tie
+            // it breaks by vertex id is broken by position: a shuffled input gives the same
+            // mesh (spec §6.7).
+            let sorted: Vec<DVec3> = order.iter().map(|&i| pts[i as usize]).collect();
+            // ASSUMPTION H2: a spatial index gives the same Lg sets as the paper's all-pairs
+            // distances: the points strictly within rho (strict <) processed before P.
+            let slab = slab_ids(&sorted, &p.slabs);
+            let (offs, idx) = {
+                let _g = ctx.phase_guard("neighbours");
+                let index = PointIndex::new(&sorted)?;
+                let table = index.radius_batch(&sorted, rho)?;
+                let mut offs = Vec::with_capacity(pts.len() + 1);
+                let mut idx = Vec::with_capacity(table.indices.len() / 2 + 1);
+                offs.push(0usize);
+                let r2 = rho * rho;
+                for i in 0..pts.len() {
+                    for (&j, &d2) in table.indices(i).iter().zip(table.dist2(i)) {
+                        let (si, sj) = (slab[i], slab[j as usize]);
+                        let same = !p.portions || si == sj;
+                        if d2 < r2 && (j as usize) < i && si >= 0 && sj >= 0 && same {
+                            idx.push(j);
                         }
-                        acc.tris.extend(o.tris);
-                        acc.stats.add(&o.stats);
-                        acc
                     }
-                });
+                    offs.push(idx.len());
+                }
+                (offs, idx)
+            };
+            ctx.checkpoint()?;
+            let k = DVec3::from_array(p.reference).normalize();
+            let opts = engine::Opts {
+                rho,
+                theta: p.theta_rad,
+                psi: p.psi_rad,
+                k,
+                strict_rho: p.strict_rho,
+                edge_distance: p.edge_distance,
+                winner_scan: p.winner_scan,
+                neighbourhood: p.neighbourhood,
+                ear_max_edge: if p.ear_max_edge > 0.0 {
+                    p.ear_max_edge * rho
+                } else {
+                    f64::INFINITY
+                },
+                conflict_rule: p.conflict_rule,
+                flips: p.flips,
+            };
+            let out = {
+                let _g = ctx.phase_guard("triangulate");
+                let c = &*ctx;
+                let nbrs = |i: u32| &idx[offs[i as usize]..offs[i as usize + 1]];
+                let n_slabs = p.slabs.len().saturating_sub(1).max(1);
+                let runs: Vec<Vec<u32>> = if p.portions {
+                    (0..n_slabs as i32)
+                        .map(|k| {
+                            (0..pts.len() as u32)
+                                .filter(|&r| slab[r as usize] == k)
+                                .collect()
+                        })
+                        .collect()
+                } else {
+                    vec![
+                        (0..pts.len() as u32)
+                            .filter(|&r| slab[r as usize] >= 0)
+                            .collect(),
+                    ]
+                };
+                let mut out: Option<engine::Outcome> = None;
+                for ranks in &runs {
+                    let o = engine::run(&sorted, ranks, nbrs, &opts, &mut || c.checkpoint())?;
+                    out = Some(match out {
+                        None => o,
+                        // ASSUMPTION H15: concatenate the portions' meshes; they share no
+                        // vertex (each point is in one slab), so seams stay open.
+                        Some(mut acc) => {
+                            for &r in ranks {
+                                acc.nc[r as usize] = o.nc[r as usize];
+                                acc.sm[r as usize] = o.sm[r as usize];
+                            }
+                            acc.tris.extend(o.tris);
+                            acc.stats.add(&o.stats);
+                            acc
+                        }
+                    });
+                }
+                let mut out = out.expect("at least one run");
+                // Back to input indices.
+                for t in &mut out.tris {
+                    *t = t.map(|v| order[v as usize]);
+                }
+                let mut nc = vec![0; pts.len()];
+                let mut sm = vec![0; pts.len()];
+                for (r, &i) in order.iter().enumerate() {
+                    nc[i as usize] = out.nc[r];
+                    sm[i as usize] = out.sm[r];
+                }
+                out.nc = nc;
+                out.sm = sm;
+                out
+            };
+            let mut d = Diagnostics::new();
+            let mut num = |k: &str, v: f64| {
+                d.insert(k.to_string(), Diagnostic::Number(v));
+            };
+            let distinct = |v: &[u32]| {
+                let mut s = v.to_vec();
+                s.sort_unstable();
+                s.dedup();
+                s.len()
+            };
+            num("rho_abs", rho);
+            num("spacing", spacing);
+            num("sm_components", distinct(&out.sm) as f64);
+            num("nc_components", distinct(&out.nc) as f64);
+            let mut used = vec![false; pts.len()];
+            for t in &out.tris {
+                for &v in t {
+                    used[v as usize] = true;
+                }
             }
-            let mut out = out.expect("at least one run");
-            // Back to input indices.
-            for t in &mut out.tris {
-                *t = t.map(|v| order[v as usize]);
-            }
-            let mut nc = vec![0; pts.len()];
-            let mut sm = vec![0; pts.len()];
-            for (r, &i) in order.iter().enumerate() {
-                nc[i as usize] = out.nc[r];
-                sm[i as usize] = out.sm[r];
-            }
-            out.nc = nc;
-            out.sm = sm;
-            out
-        };
-        let mut d = Diagnostics::new();
-        let mut num = |k: &str, v: f64| {
-            d.insert(k.to_string(), Diagnostic::Number(v));
-        };
-        let distinct = |v: &[u32]| {
-            let mut s = v.to_vec();
-            s.sort_unstable();
-            s.dedup();
-            s.len()
-        };
-        num("rho_abs", rho);
-        num("spacing", spacing);
-        num("sm_components", distinct(&out.sm) as f64);
-        num("nc_components", distinct(&out.nc) as f64);
-        let mut used = vec![false; pts.len()];
-        for t in &out.tris {
-            for &v in t {
-                used[v as usize] = true;
-            }
-        }
-        let meshed_nc: Vec<u32> = (0..pts.len())
-            .filter(|&i| used[i])
-            .map(|i| out.nc[i])
-            .collect();
-        num("nc_meshes", distinct(&meshed_nc) as f64);
-        let topo = MeshTopology::from_faces(pts.len(), &out.tris);
-        num("mesh_components", topo.face_components().0 as f64);
-        let refused: Vec<u32> = (0..pts.len() as u32)
-            .filter(|&i| !used[i as usize])
-            .collect();
-        num("unmeshed", refused.len() as f64);
-        let s = &out.stats;
-        num("first_triangles", s.first_triangles as f64);
-        num("created", s.created as f64);
-        num("splits", s.splits as f64);
-        num("extra_cases", s.extra_cases as f64);
-        num("neighbourhood_triangles", s.neighbourhood as f64);
-        num("flips", s.flips as f64);
-        num("refused_triangles", s.refused as f64);
-        num("no_winner", s.no_winner as f64);
-        num("ignored", slab.iter().filter(|&&k| k < 0).count() as f64);
-        let mesh = TriMesh::new(pts.to_vec(), out.tris)?;
-        Ok(Reconstruction {
-            mesh,
-            refused,
-            diagnostics: d,
+            let meshed_nc: Vec<u32> = (0..pts.len())
+                .filter(|&i| used[i])
+                .map(|i| out.nc[i])
+                .collect();
+            num("nc_meshes", distinct(&meshed_nc) as f64);
+            let topo = MeshTopology::from_faces(pts.len(), &out.tris);
+            num("mesh_components", topo.face_components().0 as f64);
+            let refused: Vec<u32> = (0..pts.len() as u32)
+                .filter(|&i| !used[i as usize])
+                .collect();
+            num("unmeshed", refused.len() as f64);
+            let s = &out.stats;
+            num("first_triangles", s.first_triangles as f64);
+            num("created", s.created as f64);
+            num("splits", s.splits as f64);
+            num("extra_cases", s.extra_cases as f64);
+            num("neighbourhood_triangles", s.neighbourhood as f64);
+            num("flips", s.flips as f64);
+            num("refused_triangles", s.refused as f64);
+            num("no_winner", s.no_winner as f64);
+            num("ignored", slab.iter().filter(|&&k| k < 0).count() as f64);
+            let mesh = TriMesh::new(pts.to_vec(), out.tris)?;
+            Ok(Reconstruction {
+                mesh,
+                refused,
+                diagnostics: d,
+            })
         })
     }
 }
