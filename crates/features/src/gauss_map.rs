@@ -527,6 +527,10 @@ impl FeatureDetector for GaussMap {
     fn detect(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<FeatureLabels, MethodError> {
         let p = &self.params;
         p.validate()?;
+        // Scale robustness: detect on the exact power-of-two working-scale copy (labels,
+        // scores and every parameter are scale-free).
+        let scaled = cloud.at_working_scale();
+        let cloud = scaled.as_ref().map_or(cloud, |(c, _)| c);
         let points = cloud.positions();
         let n = points.len();
         if n < 3 {
