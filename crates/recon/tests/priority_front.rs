@@ -296,6 +296,40 @@ fn degenerate_inputs_do_not_panic() {
     }
 }
 
+/// Extreme coordinate scales: a reconstruction must not collapse to an empty mesh on
+/// distinct points that span a surface and still report success. At 1e±200 the squared
+/// distances of the spacing estimate over- / underflow: a clear `InvalidInput` naming
+/// the scale. At 2^±40 (exact scalings) the mesh is the unscaled one.
+#[test]
+fn extreme_coordinate_scales_fail_clearly_or_mesh_the_same() {
+    let pts = blue(Surface::Sphere(1.0), 1500, 4);
+    let pf = PriorityFront::default();
+    let at = |s: f64| {
+        let cloud = PointCloud::new(pts.iter().map(|p| *p * s).collect()).expect("cloud");
+        pf.reconstruct(&cloud, &mut RunCtx::new(1))
+    };
+    let base = at(1.0).expect("unit scale");
+    assert!(base.mesh.n_faces() > 2000);
+    for s in [2f64.powi(40), 2f64.powi(-40)] {
+        let rec = at(s).expect("scaled by a power of two");
+        assert_eq!(rec.mesh.faces(), base.mesh.faces(), "scale {s:e}");
+    }
+    for s in [1e200, 1e-200] {
+        match at(s) {
+            Err(MethodError::InvalidInput(m)) => {
+                assert!(
+                    m.contains("coordinate scale") && m.contains("rescale"),
+                    "{m}"
+                )
+            }
+            other => panic!(
+                "scale {s:e}: expected InvalidInput, got {:?}",
+                other.map(|r| r.mesh.n_faces())
+            ),
+        }
+    }
+}
+
 #[test]
 fn deterministic_for_fixed_seed_and_thread_count() {
     let pts = blue(Surface::Torus(1.0, 0.35), 4000, 7);

@@ -48,6 +48,8 @@ pub(crate) struct Cfg {
     /// Relative height bound of the blocking Free points, share of the longest edge
     /// (IMPL-CHOICE I12).
     pub free_inside_rel: f64,
+    /// IMPL-CHOICE I13: interior mesh vertices inside (a, t, b) block it.
+    pub interior_inside: bool,
     /// IMPL-CHOICE I6: reject triangles that contain a front vertex in 2-D.
     pub front_inside_check: bool,
     pub fill_any_angle: bool,
@@ -89,6 +91,8 @@ pub(crate) struct Stats {
     pub seeds: u64,
     pub fail_rules: u64,
     pub sector_rejects: u64,
+    /// Candidates refused by IMPL-CHOICE I13 (an interior mesh vertex inside).
+    pub interior_rejects: u64,
     pub holes_closed: u64,
 }
 
@@ -107,6 +111,7 @@ impl Stats {
         self.seeds += o.seeds;
         self.fail_rules += o.fail_rules;
         self.sector_rejects += o.sector_rejects;
+        self.interior_rejects += o.interior_rejects;
         self.holes_closed += o.holes_closed;
     }
 }
@@ -153,6 +158,9 @@ pub(crate) struct Mesher<'g> {
     pub fidx: FrontIndex,
     pub cand: Vec<Cand>,
     pub free_near: Vec<u32>,
+    /// Interior mesh vertices within R of the popped edge's midpoint (scratch of
+    /// IMPL-CHOICE I13).
+    pub mesh_near: Vec<u32>,
     /// Pending candidates `(key, point)` of the lazy evaluation (scratch; key: squared
     /// distance to the edge midpoint, or minus the score bound for the segment distance).
     pub pend: Vec<(f64, u32)>,
@@ -221,6 +229,7 @@ impl<'g> Mesher<'g> {
             fidx,
             cand: Vec::new(),
             free_near: Vec::new(),
+            mesh_near: Vec::new(),
             pend: Vec::new(),
             xs: Vec::new(),
             chunks: Vec::new(),

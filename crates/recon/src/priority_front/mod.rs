@@ -105,6 +105,16 @@ impl Reconstructor for PriorityFront {
         let n_dup = dup.iter().filter(|&&d| d).count();
         num(&mut diag, "duplicates", n_dup as f64);
         let Some(rho) = rho.filter(|_| n - n_dup >= 3) else {
+            // ρ undefined on 3 or more distinct points that span a plane: the squared
+            // distances over- or underflowed (coordinates near 1e±160); an empty mesh
+            // would be a silent failure.
+            if n - n_dup >= 3 && spans_plane(input, &dup) {
+                return Err(MethodError::InvalidInput(format!(
+                    "priority-front: the point spacing is not representable at this \
+                     coordinate scale ({}); rescale the input",
+                    scale_text(input)
+                )));
+            }
             // Fewer than 3 distinct points: nothing to mesh; every point is refused.
             diag.insert(
                 "note".into(),
@@ -146,6 +156,15 @@ impl Reconstructor for PriorityFront {
 
         // M9: Free points become Refused; map back to input indices.
         let (faces, refused) = output_phase(&grown, &lay.order, n, ctx);
+        if faces.is_empty() && spans_plane(input, &dup) {
+            return Err(MethodError::Failed(format!(
+                "priority-front made no triangle on {} distinct points that span a plane \
+                 (rho {rho:e}, R {r0:e}; coordinate scale {}): the geometric tests \
+                 under- or overflow at this scale; rescale the input",
+                n - n_dup,
+                scale_text(input)
+            )));
+        }
         record_stats(&mut diag, &grown, &lay.pts, p);
         num(
             &mut diag,
@@ -155,6 +174,56 @@ impl Reconstructor for PriorityFront {
         diag.insert("assumptions".into(), Diagnostic::Text(assumption_flags(p)));
         finish(input, faces, refused, diag, t_start, grow_secs)
     }
+}
+
+/// True when the points not flagged in `dup` do not all lie on one line, decided on
+/// coordinates divided by the largest magnitude (so no product over- or underflows at
+/// any finite scale): some point's offset from the first is not parallel, to a relative
+/// 1e-9, to the offset of the point farthest from it.
+fn spans_plane(input: &[DVec3], dup: &[bool]) -> bool {
+    let m = input
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0f64, f64::max);
+    if !(m.is_finite() && m > 0.0) {
+        return false;
+    }
+    let q: Vec<DVec3> = input
+        .iter()
+        .zip(dup)
+        .filter(|(_, d)| !**d)
+        .map(|(p, _)| *p / m)
+        .collect();
+    let Some(&p0) = q.first() else {
+        return false;
+    };
+    let far = q
+        .iter()
+        .map(|&p| p - p0)
+        .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+        .unwrap_or(DVec3::ZERO);
+    let lf = far.length();
+    lf > 0.0
+        && q.iter().any(|&p| {
+            let d = p - p0;
+            far.cross(d).length() > 1e-9 * lf * d.length()
+        })
+}
+
+/// The input's largest coordinate magnitude and bounding-box extent, for error messages.
+fn scale_text(input: &[DVec3]) -> String {
+    let m = input
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(0.0f64, f64::max);
+    let (lo, hi) = input.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    format!(
+        "largest |coordinate| {m:e}, box extent {:e}",
+        (hi - lo).max_element()
+    )
 }
 
 /// Rejects inputs the mesher cannot index: fewer than 3 points, more than the `u32`
@@ -261,6 +330,7 @@ fn mesher_cfg(p: &PriorityFrontParams, r0: f64, rho: f64) -> Cfg {
         reject_free_inside: p.reject_free_inside,
         free_inside_h: p.free_inside_height * rho,
         free_inside_rel: p.free_inside_rel,
+        interior_inside: p.interior_inside_check,
         front_inside_check: p.front_inside_check,
         fill_any_angle: p.fill_any_angle,
         sector_check: p.sector_check,
@@ -408,6 +478,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
     num(diag, "threads", p.threads as f64);
     num(diag, "fail_rules", s.fail_rules as f64);
     num(diag, "sector_rejects", s.sector_rejects as f64);
+    num(diag, "interior_rejects", s.interior_rejects as f64);
     num(diag, "boundary_loops", grown.loops.len() as f64);
     num(diag, "holes_closed", s.holes_closed as f64);
     diag.insert(
@@ -426,7 +497,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -451,6 +522,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.reject_free_inside,
         p.free_inside_height,
         p.free_inside_rel,
+        p.interior_inside_check,
         p.front_inside_check,
         p.close_holes_max,
         p.stitch_zip,

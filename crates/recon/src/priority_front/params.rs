@@ -90,6 +90,15 @@ pub struct PriorityFrontParams {
     /// alone). Long triangles on a curved surface rise farther above the points they
     /// cover.
     pub free_inside_rel: f64,
+    /// IMPL-CHOICE I13 (issue 20, not in the paper or the spec; default false): reject t
+    /// when an interior mesh vertex (accepted, no front edge) within R of the edge
+    /// midpoint lies near the plane of (a, t, b) (the I12 height bound) and inside it in
+    /// 2-D: the triangle would lie on top of the mesh already made (a second layer, a
+    /// fold), which the crossing test cannot see because there is no front edge in the
+    /// interior. Off by default: it removes most false handles on the real vertex sets
+    /// but leaves a hole on the blue-noise fandisk-like shape (li_variety), see
+    /// docs/methods/priority_front.md, "Real data". false = the paper.
+    pub interior_inside_check: bool,
     /// Reject a candidate when a front vertex near the edge projects strictly inside the
     /// 2-D triangle (a, t, b) (IMPL-CHOICE I6, not in the paper; default true): the
     /// triangle would fold over the front, which the edge-crossing test misses when a
@@ -203,6 +212,7 @@ impl Default for PriorityFrontParams {
             reject_free_inside: true,
             free_inside_height: 0.5,
             free_inside_rel: 0.25,
+            interior_inside_check: false,
             front_inside_check: true,
             fill_any_angle: true,
             sector_check: true,
@@ -433,6 +443,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "free_inside_height",
         Unit::Spacing,
         "I12: with reject_free_inside, only Free points this close to the triangle's plane block it, in rho (0.5; 1000 = all)",
+    ),
+    ParamDoc::new(
+        "interior_inside_check",
+        Unit::Flag,
+        "I13: reject t when an interior mesh vertex lies inside (a,t,b) in 2-D near its plane (false; issue 20)",
     ),
     ParamDoc::new(
         "front_inside_check",

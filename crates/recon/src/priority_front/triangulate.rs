@@ -8,7 +8,7 @@ use super::cross::{
 };
 use super::density::knn;
 use super::grid::NONE;
-use super::mesher::{Cand, FREE, Mesher, REFUSED};
+use super::mesher::{ACCEPTED, Cand, FREE, Mesher, REFUSED};
 
 /// The operation chosen for a popped edge.
 #[derive(Debug, Clone, Copy)]
@@ -92,6 +92,8 @@ impl Mesher<'_> {
         // The output lists are moved into locals for the scans: the loops then keep
         // their lengths in registers (the scans were dominated by push bookkeeping).
         let mut free_near = std::mem::take(&mut self.free_near);
+        let mut mesh_near = std::mem::take(&mut self.mesh_near);
+        mesh_near.clear();
         let mut pend = std::mem::take(&mut self.pend);
         let mut xs = std::mem::take(&mut self.xs);
         let mut chunks = std::mem::take(&mut self.chunks);
@@ -102,6 +104,8 @@ impl Mesher<'_> {
         let state = &self.state;
         // `free_near` serves only the optional Free-inside test.
         let keep_free = self.cfg.reject_free_inside;
+        let keep_mesh = self.cfg.interior_inside;
+        let fin = &self.fin;
         self.grid.for_cells(o, r, |range| {
             for i in range {
                 if state[i] == FREE {
@@ -112,6 +116,12 @@ impl Mesher<'_> {
                         }
                         pend.push((d2, i as u32));
                     }
+                } else if keep_mesh
+                    && state[i] == ACCEPTED
+                    && fin[i] == NONE
+                    && (pts[i] - o).length_squared() <= r2
+                {
+                    mesh_near.push(i as u32);
                 }
             }
         });
@@ -158,6 +168,7 @@ impl Mesher<'_> {
             }
         }
         self.free_near = free_near;
+        self.mesh_near = mesh_near;
         self.pend = pend;
         self.xs = xs;
         self.chunks = chunks;
@@ -566,39 +577,20 @@ impl Mesher<'_> {
             && self.e_b[self.fout[b as usize] as usize] == t
             && self.e_a[self.fin[a as usize] as usize] == t;
         // Spec §4.4 optional strictness flag; DEVIATION: on by default (issue 20).
-        if self.cfg.reject_free_inside && !is_fill {
-            let (u, v) = plane_basis(np);
-            let tri = [a, t, b].map(|i| {
-                let q = self.pts[i as usize] - o;
-                [q.dot(u), q.dot(v)]
-            });
-            // IMPL-CHOICE I12: only Free points near the triangle's plane block it. The
-            // triangle lies within `rt` of `o`, so farther points are skipped unprojected.
-            let (pa, pt, pb) = (
-                self.pts[a as usize],
-                self.pts[t as usize],
-                self.pts[b as usize],
-            );
-            let lmax2 = (pt - pa)
-                .length_squared()
-                .max((pb - pt).length_squared())
-                .max((pb - pa).length_squared());
-            let hmax = self
-                .cfg
-                .free_inside_h
-                .max(self.cfg.free_inside_rel * lmax2.sqrt());
-            let rt2 = rt * rt;
-            for &f in &self.free_near {
-                if f != t {
-                    let q = self.pts[f as usize] - o;
-                    if q.length_squared() < rt2
-                        && inside_2d(tri, [q.dot(u), q.dot(v)])
-                        && (self.pts[f as usize] - pa).dot(c.n_new).abs() <= hmax
-                    {
-                        return None;
-                    }
-                }
-            }
+        if self.cfg.reject_free_inside
+            && !is_fill
+            && self.covers(&self.free_near, [a, t, b], o, np, rt, c.n_new)
+        {
+            return None;
+        }
+        // DEVIATION I13 (issue 20, `interior_inside_check`): no triangle on top of the
+        // mesh already made; the crossing test sees front edges only.
+        if self.cfg.interior_inside
+            && !is_fill
+            && self.covers(&self.mesh_near, [a, t, b], o, np, rt, c.n_new)
+        {
+            self.stats.interior_rejects += 1;
+            return None;
         }
         if self.state[t as usize] == FREE {
             return Some(Op::Join(t, c.n_new));
@@ -653,6 +645,44 @@ impl Mesher<'_> {
                 None
             }
         }
+    }
+
+    /// True when one of the points `near` (but the triangle's own) lies inside the 2-D
+    /// projection of `tri = (a, t, b)` on the plane through `o` with normal `np`, within
+    /// `rt` of `o` and near the triangle's plane (normal `n_new`): within max(free_inside_h,
+    /// free_inside_rel x longest edge) (IMPL-CHOICE I12). Points well off the plane (the
+    /// other sheet of a thin part, outliers) do not count.
+    fn covers(
+        &self,
+        near: &[u32],
+        tri: [u32; 3],
+        o: DVec3,
+        np: DVec3,
+        rt: f64,
+        n_new: DVec3,
+    ) -> bool {
+        let (u, v) = plane_basis(np);
+        let q2 = tri.map(|i| {
+            let q = self.pts[i as usize] - o;
+            [q.dot(u), q.dot(v)]
+        });
+        let [pa, pt, pb] = tri.map(|i| self.pts[i as usize]);
+        let lmax2 = (pt - pa)
+            .length_squared()
+            .max((pb - pt).length_squared())
+            .max((pb - pa).length_squared());
+        let hmax = self
+            .cfg
+            .free_inside_h
+            .max(self.cfg.free_inside_rel * lmax2.sqrt());
+        let rt2 = rt * rt;
+        near.iter().any(|&f| {
+            let q = self.pts[f as usize] - o;
+            !tri.contains(&f)
+                && q.length_squared() < rt2
+                && inside_2d(q2, [q.dot(u), q.dot(v)])
+                && (self.pts[f as usize] - pa).dot(n_new).abs() <= hmax
+        })
     }
 
     /// True when direction `x -> dir` lies strictly inside the free sector of `x` whose

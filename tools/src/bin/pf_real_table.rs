@@ -1,0 +1,106 @@
+//! `priority-front` on the vertices of the issue-20 real sets: one line per set, thread
+//! count and ctx seed with genus, components, boundary loops, refused on-surface points,
+//! self-intersecting face pairs and the method's wall time (issue 20's before / after
+//! table, `docs/methods/priority_front.md`, "Real data").
+//!
+//! `cargo run --release -p reconbench-tools --bin pf_real_table -- [SET ...]` (default:
+//! fandisk rocker-arm 3holes mechpart golf-club bunny, from `datasets/real/`; an
+//! argument ending in `.ply` is read as the path of a mesh).
+//! Environment: `PF_THREADS` (comma list, default `1,2`), `PF_SEEDS` (comma list,
+//! default `1,2,3`), `RECON_PARAMS` (JSON parameters; `threads` is overridden),
+//! `PF_NOSELF` (skip the self-intersection count, which dominates the probe's time).
+
+use reconbench_geom::PointCloud;
+use reconbench_geom::method::{Reconstructor, RunCtx};
+use reconbench_geom::topology::analyze;
+use reconbench_recon::{PriorityFront, PriorityFrontParams};
+
+/// A comma list of integers from the environment, or `default`.
+fn env_list(key: &str, default: &[u64]) -> Vec<u64> {
+    match std::env::var(key) {
+        Ok(s) => s
+            .split(',')
+            .map(|x| {
+                x.trim()
+                    .parse()
+                    .unwrap_or_else(|_| panic!("{key}: not an integer: {x}"))
+            })
+            .collect(),
+        Err(_) => default.to_vec(),
+    }
+}
+
+/// Parameters from `RECON_PARAMS` (or the defaults) with `threads` set.
+fn params(threads: usize) -> PriorityFrontParams {
+    let mut p = match std::env::var("RECON_PARAMS") {
+        Ok(j) => serde_json::from_str(&j).expect("RECON_PARAMS must be a JSON params object"),
+        Err(_) => PriorityFrontParams::default(),
+    };
+    p.threads = threads;
+    p
+}
+
+fn main() {
+    let mut sets: Vec<String> = std::env::args().skip(1).collect();
+    if sets.is_empty() {
+        sets = [
+            "fandisk",
+            "rocker-arm",
+            "3holes",
+            "mechpart",
+            "golf-club",
+            "bunny",
+        ]
+        .map(String::from)
+        .to_vec();
+    }
+    let threads = env_list("PF_THREADS", &[1, 2]);
+    let seeds = env_list("PF_SEEDS", &[1, 2, 3]);
+    let selfx = std::env::var("PF_NOSELF").is_err();
+    println!(
+        "set threads seed | genus comp loops bnd_edges | refused on_surface | self_pairs | faces s"
+    );
+    for name in &sets {
+        let path = if name.ends_with(".ply") {
+            name.clone()
+        } else {
+            format!("datasets/real/{name}.ply")
+        };
+        let mesh = reconbench_geom::io::read_mesh(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let mut used = vec![false; mesh.n_vertices()];
+        for f in mesh.faces() {
+            for &i in f {
+                used[i as usize] = true;
+            }
+        }
+        let cloud = PointCloud::new(mesh.vertices().to_vec()).expect("finite points");
+        for &t in &threads {
+            let pf = PriorityFront::new(params(t as usize)).expect("valid params");
+            for &s in &seeds {
+                let t0 = std::time::Instant::now();
+                let rec = pf
+                    .reconstruct(&cloud, &mut RunCtx::new(s))
+                    .expect("reconstruction");
+                let secs = t0.elapsed().as_secs_f64();
+                let topo = analyze(&rec.mesh);
+                let on = rec.refused.iter().filter(|&&i| used[i as usize]).count();
+                let pairs = if selfx {
+                    reconbench_metrics::topology::self_intersecting_pairs(&rec.mesh)
+                        .len()
+                        .to_string()
+                } else {
+                    "-".to_string()
+                };
+                println!(
+                    "{name} {t} {s} | {} {} {} {} | {} {on} | {pairs} | {} {secs:.3}",
+                    topo.genus.map_or("-".to_string(), |g| g.to_string()),
+                    topo.components,
+                    topo.n_boundary_loops(),
+                    topo.boundary_edges,
+                    rec.refused.len(),
+                    rec.mesh.n_faces(),
+                );
+            }
+        }
+    }
+}
