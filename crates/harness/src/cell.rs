@@ -72,6 +72,8 @@ pub const DIAGNOSTIC_METRICS: &[&str] = &[
     "iterations",
     "unmatched_points",
     "pinched_vertices",
+    // ball-pivoting: input points no triangle reached.
+    "unused_points",
     // ebt (seed 004): Table 1's columns and the measured error bound.
     "m1",
     "m2",

@@ -364,6 +364,9 @@ fn validate_expectations(expect: &[Expect]) -> Result<()> {
     for (i, e) in expect.iter().enumerate() {
         crate::compare::Tol::parse(&e.tol)
             .map_err(|err| HarnessError::input(format!("expect[{i}].tol: {err}")))?;
+        if e.metric != "time" && !e.metric.starts_with("cost.") {
+            metric_spec::check_metric_name(&e.metric, &format!("expect[{i}].metric"))?;
+        }
         for sel in std::iter::once(&e.select).chain(e.over.as_ref()) {
             for k in sel.keys() {
                 let known = ["dataset", "method", "perturbation", "shape", "points"]
@@ -458,6 +461,12 @@ impl Experiment {
 }
 
 fn validate_report(r: &ReportOptions, swept: &[String]) -> Result<()> {
+    for m in &r.metrics {
+        metric_spec::check_metric_name(m, "report.metrics")?;
+    }
+    for m in &r.plot_metrics {
+        metric_spec::check_metric_name(m, "report.plot_metrics")?;
+    }
     for t in &r.tables {
         if !["md", "tex", "csv"].contains(&t.as_str()) {
             return Err(HarnessError::input(format!(
