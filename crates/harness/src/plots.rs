@@ -4,7 +4,11 @@
 //! * metric vs perturbation level: one line per method, a band for mean ± std over seeds;
 //! * log-log time vs input size with the fitted slope of each method;
 //! * box plots of per-point errors (box = quartiles, whiskers = min and 95th percentile,
-//!   averaged over seeds).
+//!   averaged over seeds), drawn horizontally with one labelled row per box.
+//!
+//! A method has one colour everywhere ([`method_colour`]), legends sit in a panel right
+//! of the data, every tick label of an axis has one format ([`tick_format`]) and bands of
+//! a non-negative metric stop at 0.
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -28,11 +32,47 @@ pub fn register_fonts() {
     });
 }
 
+/// A fixed qualitative palette (Tableau 10 and its lighter half): a method keeps its
+/// colour in every plot and every report, see [`method_colour`].
+const PALETTE: [RGBColor; 16] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+    RGBColor(57, 59, 121),
+    RGBColor(173, 73, 74),
+    RGBColor(99, 121, 57),
+    RGBColor(140, 109, 49),
+    RGBColor(123, 65, 115),
+    RGBColor(82, 84, 163),
+];
+
+/// The colour of a method label: an FNV-1a hash of the label into [`PALETTE`], so it
+/// depends on the label alone (not on which other methods a report holds or their
+/// order). Two labels may share a colour; legends and box labels still tell them apart.
+pub fn method_colour(label: &str) -> RGBColor {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in label.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    PALETTE[(h % PALETTE.len() as u64) as usize]
+}
+
 /// One line of a [`LinePlot`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Series {
     /// Legend entry.
     pub name: String,
+    /// The label its colour comes from (the method label, also for a series whose name
+    /// adds the other swept keys), see [`method_colour`].
+    pub colour_key: String,
     /// `(x, y, y_low, y_high)`; the band spans `y_low..y_high`.
     pub points: Vec<(f64, f64, f64, f64)>,
 }
@@ -42,26 +82,45 @@ pub struct Series {
 pub struct LinePlot {
     /// Title.
     pub title: String,
-    /// X axis label.
+    /// X axis label (with its unit).
     pub x_label: String,
-    /// Y axis label.
+    /// Y axis label (with its unit).
     pub y_label: String,
     /// Lines.
     pub series: Vec<Series>,
     /// Log-log axes.
     pub log: bool,
+    /// The metric cannot be negative: bands are clipped at 0 and the axis starts at 0.
+    pub non_negative: bool,
 }
 
-/// A box plot.
+/// One box of a [`BoxPlot`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxEntry {
+    /// Category label, written beside the box.
+    pub label: String,
+    /// The label its colour comes from (the method label), see [`method_colour`].
+    pub colour_key: String,
+    /// Distribution.
+    pub dist: Dist,
+}
+
+/// A box plot, drawn horizontally: one row per box with its label on the left, so that
+/// any number of labels of any length stay legible (the plot grows in height).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BoxPlot {
     /// Title.
     pub title: String,
-    /// Y axis label.
+    /// Value axis label (with its unit).
     pub y_label: String,
-    /// `(category, distribution)`.
-    pub boxes: Vec<(String, Dist)>,
+    /// Boxes, top to bottom.
+    pub boxes: Vec<BoxEntry>,
 }
+
+/// Font size of tick and legend labels, in pixels.
+pub const LABEL_FONT: u32 = 13;
+/// Height in pixels of one box row of a [`BoxPlot`].
+pub const BOX_ROW: u32 = 24;
 
 fn err(e: impl std::fmt::Display) -> HarnessError {
     HarnessError::failure(format!("plot: {e}"))
@@ -101,6 +160,107 @@ fn padded(lo: f64, hi: f64, log: bool) -> (f64, f64) {
     }
 }
 
+/// The tick format of a linear axis over `lo..hi`: one format for every tick, fixed
+/// decimals from the tick step (about ten ticks), or scientific with two digits when
+/// the values are too small or large for that to stay short.
+pub fn tick_format(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
+    let big = lo.abs().max(hi.abs());
+    let step = ((hi - lo) / 10.0).abs();
+    let decimals = if step > 0.0 && step.is_finite() {
+        (-step.log10().floor()).max(0.0) as usize
+    } else {
+        2
+    };
+    let scientific = !(1e-3..1e5).contains(&big) && big != 0.0 || decimals > 5;
+    move |v: &f64| {
+        if scientific {
+            format!("{v:.1e}")
+        } else {
+            // Rounding can leave "-0.000".
+            let s = format!("{v:.decimals$}");
+            if s.trim_start_matches('-')
+                .chars()
+                .all(|c| c == '0' || c == '.')
+            {
+                s.trim_start_matches('-').to_string()
+            } else {
+                s
+            }
+        }
+    }
+}
+
+/// The tick format of a log axis: the value with two significant digits (`1.0e3`).
+fn log_tick(v: &f64) -> String {
+    format!("{v:.1e}")
+}
+
+/// Width in pixels of `text` at `font` pixels: an upper bound for DejaVu Sans (whose
+/// widest common glyphs are about 0.62 em).
+pub fn text_width(text: &str, font: u32) -> u32 {
+    (text.chars().count() as f64 * font as f64 * 0.62).ceil() as u32
+}
+
+/// Width of the legend panel right of the data: the longest entry plus the swatch.
+fn legend_width(names: &[&str]) -> u32 {
+    names
+        .iter()
+        .map(|n| text_width(n, LABEL_FONT))
+        .max()
+        .unwrap_or(0)
+        + 48
+}
+
+/// Draws the legend in its own panel (never over the data).
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, RGBColor)],
+    top: i32,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (w, _) = area.dim_in_pixel();
+    let h = entries.len() as i32 * 20 + 10;
+    area.draw(&Rectangle::new(
+        [(4, top), (w as i32 - 4, top + h)],
+        BLACK.stroke_width(1),
+    ))
+    .map_err(err)?;
+    for (i, (name, c)) in entries.iter().enumerate() {
+        let y = top + 15 + 20 * i as i32;
+        area.draw(&PathElement::new(vec![(12, y), (32, y)], c.stroke_width(3)))
+            .map_err(err)?;
+        area.draw(&Text::new(
+            name.clone(),
+            (38, y - LABEL_FONT as i32 / 2 - 1),
+            ("sans-serif", LABEL_FONT).into_font(),
+        ))
+        .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// The y range of a line plot: the data and bands, padded; from 0 for a non-negative
+/// metric (no padding below 0).
+fn line_y_range(p: &LinePlot, all: &[&(f64, f64, f64, f64)]) -> (f64, f64) {
+    let low = |q: &(f64, f64, f64, f64)| {
+        let l = q.2.min(q.1);
+        if p.non_negative { l.max(0.0) } else { l }
+    };
+    let y0 = all.iter().map(|q| low(q)).fold(f64::INFINITY, f64::min);
+    let y1 = all
+        .iter()
+        .map(|q| q.3.max(q.1))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let (a, b) = padded(y0, y1, p.log);
+    if p.non_negative && !p.log {
+        (a.max(0.0).min(y0), b)
+    } else {
+        (a, b)
+    }
+}
+
 fn draw_lines<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &LinePlot) -> Result<()>
 where
     DB::ErrorType: 'static,
@@ -110,15 +270,7 @@ where
     let xs = all.iter().map(|q| q.0);
     let x0 = xs.clone().fold(f64::INFINITY, f64::min);
     let x1 = xs.fold(f64::NEG_INFINITY, f64::max);
-    let y0 = all
-        .iter()
-        .map(|q| q.2.min(q.1))
-        .fold(f64::INFINITY, f64::min);
-    let y1 = all
-        .iter()
-        .map(|q| q.3.max(q.1))
-        .fold(f64::NEG_INFINITY, f64::max);
-    if all.is_empty() || !x0.is_finite() || !y0.is_finite() {
+    if all.is_empty() || !x0.is_finite() {
         root.draw(&Text::new(
             "no data",
             (20, 20),
@@ -128,29 +280,40 @@ where
         return root.present().map_err(err);
     }
     let (x0, x1) = padded(x0, x1, p.log);
-    let (y0, y1) = padded(y0, y1, p.log);
-    let mut builder = ChartBuilder::on(root);
+    let (y0, y1) = line_y_range(p, &all);
+    let names: Vec<&str> = p.series.iter().map(|s| s.name.as_str()).collect();
+    let (w, _) = root.dim_in_pixel();
+    let lw = legend_width(&names).min(w / 2);
+    let (left, right) = root.split_horizontally(w - lw);
+    let mut builder = ChartBuilder::on(&left);
     builder
         .caption(&p.title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(45)
-        .y_label_area_size(75);
+        .y_label_area_size(80);
+    let xf = tick_format(x0, x1);
+    let yf = tick_format(y0, y1);
     macro_rules! body {
-        ($chart:ident) => {{
+        ($chart:ident, $xf:expr, $yf:expr) => {{
             $chart
                 .configure_mesh()
                 .x_desc(p.x_label.as_str())
                 .y_desc(p.y_label.as_str())
-                .x_label_formatter(&|v| crate::tables::fmt_num(*v))
-                .y_label_formatter(&|v| crate::tables::fmt_num(*v))
-                .label_style(("sans-serif", 13))
+                .x_label_formatter($xf)
+                .y_label_formatter($yf)
+                .label_style(("sans-serif", LABEL_FONT))
                 .axis_desc_style(("sans-serif", 15))
                 .draw()
                 .map_err(err)?;
-            for (i, s) in p.series.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
+            for s in &p.series {
+                let color = method_colour(&s.colour_key);
                 let mut pts = s.points.clone();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                if p.non_negative {
+                    for q in &mut pts {
+                        q.2 = q.2.max(0.0);
+                    }
+                }
                 if pts.iter().any(|q| q.3 > q.2) {
                     let mut poly: Vec<(f64, f64)> = pts.iter().map(|q| (q.0, q.3)).collect();
                     poly.extend(pts.iter().rev().map(|q| (q.0, q.2)));
@@ -166,11 +329,7 @@ where
                         pts.iter().map(|q| (q.0, q.1)),
                         color.stroke_width(2),
                     ))
-                    .map_err(err)?
-                    .label(s.name.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                    });
+                    .map_err(err)?;
                 $chart
                     .draw_series(
                         pts.iter()
@@ -178,26 +337,30 @@ where
                     )
                     .map_err(err)?;
             }
-            $chart
-                .configure_series_labels()
-                .label_font(("sans-serif", 13))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperLeft)
-                .draw()
-                .map_err(err)?;
         }};
     }
     if p.log {
         let mut chart = builder
             .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
             .map_err(err)?;
-        body!(chart);
+        body!(chart, &log_tick, &log_tick);
     } else {
         let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1).map_err(err)?;
-        body!(chart);
+        body!(chart, &xf, &yf);
     }
+    let entries: Vec<(String, RGBColor)> = p
+        .series
+        .iter()
+        .map(|s| (s.name.clone(), method_colour(&s.colour_key)))
+        .collect();
+    draw_legend(&right, &entries, 40)?;
     root.present().map_err(err)
+}
+
+/// Pixel size of a box plot of `n` boxes at width `w`: at least `min_h` high, and high
+/// enough for one [`BOX_ROW`] per box.
+pub fn box_plot_size(n: usize, (w, min_h): (u32, u32)) -> (u32, u32) {
+    (w, min_h.max(n as u32 * BOX_ROW + 110))
 }
 
 fn draw_boxes<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &BoxPlot) -> Result<()>
@@ -206,71 +369,80 @@ where
 {
     root.fill(&WHITE).map_err(err)?;
     let n = p.boxes.len().max(1);
-    let y0 = p
+    let x0 = p
         .boxes
         .iter()
-        .map(|b| b.1.min)
+        .map(|b| b.dist.min)
         .fold(f64::INFINITY, f64::min);
-    let y1 = p
+    let x1 = p
         .boxes
         .iter()
-        .map(|b| b.1.p95.max(b.1.q3))
+        .map(|b| b.dist.p95.max(b.dist.q3))
         .fold(f64::NEG_INFINITY, f64::max);
-    let (y0, y1) = if y0.is_finite() {
-        padded(y0.min(0.0), y1, false)
+    let (x0, x1) = if x0.is_finite() {
+        let (a, b) = padded(x0.min(0.0), x1, false);
+        (if x0 >= 0.0 { 0.0 } else { a }, b)
     } else {
         (0.0, 1.0)
     };
-    let labels: Vec<String> = p.boxes.iter().map(|b| b.0.clone()).collect();
+    let labels: Vec<String> = p.boxes.iter().map(|b| b.label.clone()).collect();
+    let label_w = labels
+        .iter()
+        .map(|l| text_width(l, LABEL_FONT))
+        .max()
+        .unwrap_or(40)
+        + 16;
+    let xf = tick_format(x0, x1);
+    // Row i (from the top) is centred on y = n - 1 - i.
     let mut chart = ChartBuilder::on(root)
         .caption(&p.title, ("sans-serif", 20))
         .margin(12)
-        .x_label_area_size(60)
-        .y_label_area_size(75)
-        .build_cartesian_2d(-0.5f64..(n as f64 - 0.5), y0..y1)
+        .x_label_area_size(45)
+        .y_label_area_size(label_w)
+        .build_cartesian_2d(x0..x1, -0.5f64..(n as f64 - 0.5))
         .map_err(err)?;
     chart
         .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(n)
-        .x_label_formatter(&|x: &f64| {
-            let i = x.round();
-            if (x - i).abs() < 1e-6 && i >= 0.0 {
-                labels.get(i as usize).cloned().unwrap_or_default()
+        .disable_y_mesh()
+        .y_labels(n)
+        .y_label_formatter(&|y: &f64| {
+            let i = y.round();
+            if (y - i).abs() < 1e-6 && i >= 0.0 && (i as usize) < n {
+                labels.get(n - 1 - i as usize).cloned().unwrap_or_default()
             } else {
                 String::new()
             }
         })
-        .y_desc(p.y_label.as_str())
-        .y_label_formatter(&|v| crate::tables::fmt_num(*v))
-        .label_style(("sans-serif", 12))
+        .x_desc(p.y_label.as_str())
+        .x_label_formatter(&xf)
+        .label_style(("sans-serif", LABEL_FONT))
         .axis_desc_style(("sans-serif", 15))
         .draw()
         .map_err(err)?;
-    for (i, (_, d)) in p.boxes.iter().enumerate() {
-        let x = i as f64;
-        let color = Palette99::pick(i).to_rgba();
-        let w = 0.3;
+    for (i, b) in p.boxes.iter().enumerate() {
+        let (y, d) = ((n - 1 - i) as f64, &b.dist);
+        let color = method_colour(&b.colour_key);
+        let h = 0.32;
         chart
             .draw_series([
-                Rectangle::new([(x - w, d.q1), (x + w, d.q3)], color.mix(0.35).filled()),
-                Rectangle::new([(x - w, d.q1), (x + w, d.q3)], color.stroke_width(2)),
+                Rectangle::new([(d.q1, y - h), (d.q3, y + h)], color.mix(0.45).filled()),
+                Rectangle::new([(d.q1, y - h), (d.q3, y + h)], color.stroke_width(2)),
             ])
             .map_err(err)?;
         chart
             .draw_series([
                 PathElement::new(
-                    vec![(x - w, d.median), (x + w, d.median)],
+                    vec![(d.median, y - h), (d.median, y + h)],
                     BLACK.stroke_width(2),
                 ),
-                PathElement::new(vec![(x, d.q3), (x, d.p95)], BLACK.stroke_width(1)),
-                PathElement::new(vec![(x, d.q1), (x, d.min)], BLACK.stroke_width(1)),
+                PathElement::new(vec![(d.q3, y), (d.p95, y)], BLACK.stroke_width(1)),
+                PathElement::new(vec![(d.q1, y), (d.min, y)], BLACK.stroke_width(1)),
                 PathElement::new(
-                    vec![(x - w / 2.0, d.p95), (x + w / 2.0, d.p95)],
+                    vec![(d.p95, y - h / 2.0), (d.p95, y + h / 2.0)],
                     BLACK.stroke_width(1),
                 ),
                 PathElement::new(
-                    vec![(x - w / 2.0, d.min), (x + w / 2.0, d.min)],
+                    vec![(d.min, y - h / 2.0), (d.min, y + h / 2.0)],
                     BLACK.stroke_width(1),
                 ),
             ])
@@ -296,6 +468,10 @@ pub fn write(plot: &Plot, stem: &Path, size: (u32, u32)) -> Result<(PathBuf, Pat
     }
     let png = stem.with_extension("png");
     let svg = stem.with_extension("svg");
+    let size = match plot {
+        Plot::Boxes(b) => box_plot_size(b.boxes.len(), size),
+        Plot::Lines(_) => size,
+    };
     {
         let root = BitMapBackend::new(&png, size).into_drawing_area();
         match plot {
@@ -336,9 +512,11 @@ mod tests {
             y_label: "deg".into(),
             series: vec![Series {
                 name: "m".into(),
+                colour_key: "m".into(),
                 points: vec![(0.0, 1.0, 0.5, 1.5), (0.01, 2.0, 1.5, 2.5)],
             }],
             log: false,
+            non_negative: true,
         });
         let (png, svg) = write(&plot, &dir.path().join("p"), (320, 200)).unwrap();
         let bytes = std::fs::read(&png).unwrap();
@@ -351,7 +529,11 @@ mod tests {
         let boxes = Plot::Boxes(BoxPlot {
             title: "b".into(),
             y_label: "deg".into(),
-            boxes: vec![("a".into(), Dist::of("x", &[1.0, 2.0, 3.0, 4.0]).unwrap())],
+            boxes: vec![BoxEntry {
+                label: "a".into(),
+                colour_key: "a".into(),
+                dist: Dist::of("x", &[1.0, 2.0, 3.0, 4.0]).unwrap(),
+            }],
         });
         write(&boxes, &dir.path().join("b"), (300, 200)).unwrap();
     }

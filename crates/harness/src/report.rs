@@ -13,7 +13,7 @@ use crate::compare::Tol;
 use crate::error::{HarnessError, Result};
 use crate::experiment::{Expect, Experiment, ReportOptions};
 use crate::inputs::FileKind;
-use crate::plots::{BoxPlot, LinePlot, Plot, Series, loglog_slope};
+use crate::plots::{BoxEntry, BoxPlot, LinePlot, Plot, Series, loglog_slope};
 use crate::registry::MethodKind;
 use crate::runner::Manifest;
 use crate::store::{Row, Status, read_rows};
@@ -529,7 +529,7 @@ fn write_kind_section(
     let mut table_files = Vec::new();
     let stem = t.kind.as_str();
     let _ = writeln!(md, "## {}\n", kind_title(t.kind));
-    md.push_str("Mean ± std over seeds; best of each dataset and perturbation in bold; ↑ higher is better, ↓ lower is better; oracles (handed the ground truth: the floor or ceiling a method can reach) in italics and never bold.\n\n");
+    md.push_str("Mean ± std over seeds; best of each dataset and perturbation in bold; ↑ higher is better, ↓ lower is better; oracles (handed the ground truth: the floor or ceiling a method can reach) last in each block, in italics and never bold; no bold in a column where a method of the block has no value (–).\n\n");
     md.push_str(&tables::markdown(t));
     let mut links = Vec::new();
     for fmt in &opts.tables {
@@ -656,57 +656,13 @@ fn kind_plots(
     if let Some(x) = &x {
         for d in &datasets {
             for m in &metrics {
-                let mut series: BTreeMap<String, Series> = BTreeMap::new();
-                let mut order: Vec<String> = Vec::new();
-                for g in gs.iter().filter(|g| &g.labels.dataset == d) {
-                    let Some(s) = g.metrics.get(m) else { continue };
-                    let xv = if x == "points" {
-                        group_points(g) as f64
-                    } else {
-                        g.data.perturb.get(x).and_then(Value::as_f64).unwrap_or(0.0)
-                    };
-                    let rest: Vec<String> = g
-                        .data
-                        .perturb
-                        .iter()
-                        .filter(|(k, _)| *k != x && swept.contains(k))
-                        .map(|(k, v)| format!("{k}={v}"))
-                        .collect();
-                    let name = if rest.is_empty() {
-                        g.labels.method.clone()
-                    } else {
-                        format!("{} {}", g.labels.method, rest.join(" "))
-                    };
-                    if !order.contains(&name) {
-                        order.push(name.clone());
-                    }
-                    series
-                        .entry(name.clone())
-                        .or_insert_with(|| Series {
-                            name,
-                            points: Vec::new(),
-                        })
-                        .points
-                        .push((xv, s.mean, s.mean - s.std, s.mean + s.std));
+                if let Some(plot) = metric_plot(&gs, d, m, x, swept) {
+                    out.push((
+                        format!("{}_{}_vs_{}_{}", kind.as_str(), slug(m), slug(x), slug(d)),
+                        format!("{m} vs {x} on {d} (mean, band = ± std over seeds)"),
+                        Plot::Lines(plot),
+                    ));
                 }
-                if series.is_empty() {
-                    continue;
-                }
-                let series: Vec<Series> = order
-                    .into_iter()
-                    .filter_map(|n| series.remove(&n))
-                    .collect();
-                out.push((
-                    format!("{}_{}_vs_{}_{}", kind.as_str(), slug(m), slug(x), slug(d)),
-                    format!("{m} vs {x} on {d} (mean, band = ± std over seeds)"),
-                    Plot::Lines(LinePlot {
-                        title: format!("{d}: {m}"),
-                        x_label: format!("{x} (fraction of diagonal)"),
-                        y_label: m.clone(),
-                        series,
-                        log: false,
-                    }),
-                ));
             }
         }
     }
@@ -735,8 +691,9 @@ fn kind_plots(
                 Series {
                     name: match slope {
                         Some(s) => format!("{name} (slope {s:.2})"),
-                        None => name,
+                        None => name.clone(),
                     },
+                    colour_key: name,
                     points: pts.into_iter().map(|(x, y)| (x, y, y, y)).collect(),
                 }
             })
@@ -748,38 +705,159 @@ fn kind_plots(
                 "method time vs number of points (log-log, fitted slope in the legend)".to_string(),
                 Plot::Lines(LinePlot {
                     title: format!("{}: time vs size", kind_title(kind)),
-                    x_label: "points".into(),
+                    x_label: "input points".into(),
                     y_label: "method time (s)".into(),
                     series,
                     log: true,
+                    non_negative: true,
                 }),
             ));
         }
     }
     // Box plots of per-point errors.
     for d in &datasets {
-        let boxes: Vec<(String, crate::store::Dist)> = gs
+        let boxes: Vec<BoxEntry> = gs
             .iter()
             .filter(|g| &g.labels.dataset == d)
             .filter_map(|g| {
-                g.dist
-                    .clone()
-                    .map(|dist| (format!("{} @ {}", g.labels.method, g.labels.perturb), dist))
+                g.dist.clone().map(|dist| BoxEntry {
+                    label: format!("{} @ {}", g.labels.method, g.labels.perturb),
+                    colour_key: g.labels.method.clone(),
+                    dist,
+                })
             })
             .collect();
         if boxes.is_empty() {
             continue;
         }
-        let what = boxes[0].1.what.clone();
+        let what = boxes[0].dist.what.clone();
         out.push((
             format!("{}_errors_box_{}", kind.as_str(), slug(d)),
             format!("per-point {what} on {d} (box = quartiles, whiskers = min and p95; averaged over seeds)"),
             Plot::Boxes(BoxPlot {
                 title: format!("{d}: per-point {what}"),
-                y_label: what,
+                y_label: dist_axis_label(&what),
                 boxes,
             }),
         ));
     }
     out
+}
+
+/// The line plot of metric `m` against `x` on dataset `d`: one series per method label
+/// (and the other swept keys), `None` when no configuration has the metric or the
+/// configurations share one x value (a plot of single dots says nothing).
+fn metric_plot(gs: &[&Group], d: &str, m: &str, x: &str, swept: &[String]) -> Option<LinePlot> {
+    let mut series: Vec<Series> = Vec::new();
+    for g in gs.iter().filter(|g| g.labels.dataset == d) {
+        let Some(s) = g.metrics.get(m) else { continue };
+        let xv = if x == "points" {
+            group_points(g) as f64
+        } else {
+            g.data.perturb.get(x).and_then(Value::as_f64).unwrap_or(0.0)
+        };
+        let rest: Vec<String> = g
+            .data
+            .perturb
+            .iter()
+            .filter(|(k, _)| *k != x && swept.contains(k))
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        let name = if rest.is_empty() {
+            g.labels.method.clone()
+        } else {
+            format!("{} {}", g.labels.method, rest.join(" "))
+        };
+        let point = (xv, s.mean, s.mean - s.std, s.mean + s.std);
+        match series.iter_mut().find(|s| s.name == name) {
+            Some(s) => s.points.push(point),
+            None => series.push(Series {
+                name,
+                colour_key: g.labels.method.clone(),
+                points: vec![point],
+            }),
+        }
+    }
+    let xs: BTreeSet<u64> = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.0.to_bits()))
+        .collect();
+    if xs.len() < 2 {
+        return None;
+    }
+    Some(LinePlot {
+        title: format!("{d}: {m}"),
+        x_label: x_axis_label(x),
+        y_label: metric_axis_label(m),
+        series,
+        log: false,
+        non_negative: metric_non_negative(m),
+    })
+}
+
+/// The x axis label of a perturbation key (or `points`) with its unit
+/// (`experiments/README.md`, perturbation keys).
+pub fn x_axis_label(x: &str) -> String {
+    let unit = match x {
+        "points" => "count",
+        "noise" | "ball" | "gaussian" | "normal-gaussian" => "fraction of diagonal",
+        "ma-uniform" => "multiple of the local spacing",
+        "decimate" => "share of points kept",
+        "duplicate" | "copies" | "outliers" => "share of points",
+        "holes" => "count",
+        _ => return x.to_string(),
+    };
+    format!("{x} ({unit})")
+}
+
+/// The unit of a metric, from its name (`docs/METRICS.md`); empty for counts, flags and
+/// ratios without one.
+pub fn metric_unit(m: &str) -> &'static str {
+    const DIST: &[&str] = &[
+        "chamfer",
+        "hausdorff",
+        "accuracy_",
+        "completeness_",
+        "_dist",
+        "rms_dist",
+        "feature_radius",
+    ];
+    if m.ends_with("_deg") {
+        "deg"
+    } else if m.ends_with("_abs") {
+        "absolute length"
+    } else if m.ends_with("_s") {
+        "s"
+    } else if m.ends_with("_mib") {
+        "MiB"
+    } else if ["fscore_", "precision_0", "recall_0"]
+        .iter()
+        .any(|p| m.starts_with(p))
+    {
+        "%"
+    } else if DIST.iter().any(|p| m.contains(p)) {
+        "fraction of diagonal"
+    } else {
+        ""
+    }
+}
+
+/// `metric (unit)`, or the metric alone when it has no unit.
+pub fn metric_axis_label(m: &str) -> String {
+    match metric_unit(m) {
+        "" => m.to_string(),
+        u => format!("{m} ({u})"),
+    }
+}
+
+/// The axis label of a box plot's distribution, e.g. `surface distance (diag)` becomes
+/// `surface distance (fraction of diagonal)`.
+fn dist_axis_label(what: &str) -> String {
+    what.replace("(diag)", "(fraction of diagonal)")
+}
+
+/// Whether a metric cannot be negative (every reported metric but the Euler
+/// characteristic): its bands stop at 0.
+pub fn metric_non_negative(m: &str) -> bool {
+    m != "euler"
 }

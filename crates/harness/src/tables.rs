@@ -118,7 +118,9 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
                 let idx: Vec<usize> = (0..rows.len())
                     .filter(|&i| rows[i].dataset == d && rows[i].perturb == p && !rows[i].oracle)
                     .collect();
-                if idx.len() < 2 {
+                // A block where a method lacks the value (e.g. F1 undefined for a method
+                // that rightly labelled nothing on a featureless shape) has no winner.
+                if idx.len() < 2 || idx.iter().any(|&i| rows[i].values[ci].is_none()) {
                     continue;
                 }
                 let best = idx
@@ -140,6 +142,7 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
                 }
             }
         }
+        oracles_last(&mut rows);
         out.push(Table {
             kind,
             columns,
@@ -147,6 +150,20 @@ pub fn build(groups: &[Group], requested: &[String]) -> Vec<Table> {
         });
     }
     out
+}
+
+/// Moves the oracle rows of each (dataset, perturbation) block behind the methods that
+/// had to work for their result, keeping the order otherwise.
+fn oracles_last(rows: &mut [TableRow]) {
+    let mut start = 0;
+    while start < rows.len() {
+        let key = (rows[start].dataset.clone(), rows[start].perturb.clone());
+        let end = (start..rows.len())
+            .find(|&i| (&rows[i].dataset, &rows[i].perturb) != (&key.0, &key.1))
+            .unwrap_or(rows.len());
+        rows[start..end].sort_by_key(|r| r.oracle);
+        start = end;
+    }
 }
 
 /// Appends [`PEER_RATIO_COLUMN`]: each row's mean method time over the smallest mean
@@ -243,7 +260,10 @@ pub fn markdown(t: &Table) -> String {
         );
         for (v, b) in r.values.iter().zip(&r.best) {
             let text = cell_text(v);
-            if *b {
+            if r.oracle && text != "–" {
+                // Markdown has no grey: the whole oracle row is in italics.
+                let _ = write!(s, " *{text}* |");
+            } else if *b {
                 let _ = write!(s, " **{text}** |");
             } else {
                 let _ = write!(s, " {text} |");
@@ -278,9 +298,10 @@ pub fn tex_escape(s: &str) -> String {
     out
 }
 
-/// LaTeX table (needs `\usepackage{booktabs}`).
+/// LaTeX table (needs `\usepackage{booktabs}` and `\usepackage{xcolor}`: oracle rows
+/// are grey).
 pub fn latex(t: &Table, caption: &str) -> String {
-    let mut s = String::new();
+    let mut s = String::from("% needs \\usepackage{booktabs} and \\usepackage{xcolor}\n");
     s.push_str("\\begin{table}[t]\n\\centering\n\\small\n");
     let _ = writeln!(
         s,
@@ -305,7 +326,10 @@ pub fn latex(t: &Table, caption: &str) -> String {
             tex_escape(&r.dataset),
             tex_escape(&r.perturb),
             if r.oracle {
-                format!("\\textit{{{}}} (oracle)", tex_escape(&r.method))
+                format!(
+                    "\\textcolor{{gray}}{{\\textit{{{}}} (oracle)}}",
+                    tex_escape(&r.method)
+                )
             } else {
                 tex_escape(&r.method)
             }
@@ -317,7 +341,9 @@ pub fn latex(t: &Table, caption: &str) -> String {
                 Some(st) => fmt_num(st.mean),
             };
             let text = text.replace('–', "--");
-            if *b {
+            if r.oracle {
+                let _ = write!(s, " & \\textcolor{{gray}}{{{text}}}");
+            } else if *b {
                 let _ = write!(s, " & \\textbf{{{text}}}");
             } else {
                 let _ = write!(s, " & {text}");
@@ -448,6 +474,23 @@ mod tests {
         assert!(row("jet").best[0], "the best real method is bold");
         let md = markdown(t);
         assert!(md.contains("*gt-normals* (oracle)"), "{md}");
+    }
+
+    #[test]
+    fn no_bold_where_a_method_lacks_the_value_and_oracles_come_last() {
+        let mut none = group("pca-variation", 0.0);
+        none.metrics.clear();
+        let groups = vec![group("gt-normals", 0.0), group("gauss-map", 0.0), none];
+        let t = &build(&groups, &[])[0];
+        let methods: Vec<&str> = t.rows.iter().map(|r| r.method.as_str()).collect();
+        assert_eq!(methods, ["gauss-map", "pca-variation", "gt-normals"]);
+        assert!(
+            !t.rows[0].best[0],
+            "0 is not best against an undefined value"
+        );
+        let md = markdown(t);
+        assert!(md.contains("| *0* |"), "oracle values in italics: {md}");
+        assert!(latex(t, "c").contains("\\textcolor{gray}"));
     }
 
     #[test]
