@@ -119,6 +119,8 @@ pub struct BoxPlot {
 
 /// Font size of tick and legend labels, in pixels.
 pub const LABEL_FONT: u32 = 13;
+/// Ticks per axis (about): few enough that labels of 6 digits do not collide.
+pub const TICKS: usize = 6;
 /// Height in pixels of one box row of a [`BoxPlot`].
 pub const BOX_ROW: u32 = 24;
 
@@ -161,11 +163,11 @@ fn padded(lo: f64, hi: f64, log: bool) -> (f64, f64) {
 }
 
 /// The tick format of a linear axis over `lo..hi`: one format for every tick, fixed
-/// decimals from the tick step (about ten ticks), or scientific with two digits when
+/// decimals from the tick step (about [`TICKS`] ticks), or scientific with two digits when
 /// the values are too small or large for that to stay short.
 pub fn tick_format(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
     let big = lo.abs().max(hi.abs());
-    let step = ((hi - lo) / 10.0).abs();
+    let step = ((hi - lo) / TICKS as f64).abs();
     let decimals = if step > 0.0 && step.is_finite() {
         (-step.log10().floor()).max(0.0) as usize
     } else {
@@ -299,6 +301,8 @@ where
                 .configure_mesh()
                 .x_desc(p.x_label.as_str())
                 .y_desc(p.y_label.as_str())
+                .x_labels(TICKS)
+                .y_labels(TICKS)
                 .x_label_formatter($xf)
                 .y_label_formatter($yf)
                 .label_style(("sans-serif", LABEL_FONT))
@@ -414,6 +418,7 @@ where
             }
         })
         .x_desc(p.y_label.as_str())
+        .x_labels(TICKS)
         .x_label_formatter(&xf)
         .label_style(("sans-serif", LABEL_FONT))
         .axis_desc_style(("sans-serif", 15))
