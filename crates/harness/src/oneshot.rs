@@ -92,6 +92,12 @@ pub fn run(
             summary.insert("vertices".into(), r.mesh.n_vertices() as f64);
             summary.insert("faces".into(), r.mesh.n_faces() as f64);
             summary.insert("refused".into(), r.refused.len() as f64);
+            let mut used = vec![false; r.mesh.n_vertices()];
+            for &v in r.mesh.faces().iter().flatten() {
+                used[v as usize] = true;
+            }
+            let unused = used.iter().filter(|&&u| !u).count();
+            summary.insert("unreferenced_vertices".into(), unused as f64);
             reconbench_geom::io::write_mesh(output, &r.mesh)
                 .map_err(|e| HarnessError::failure(e.to_string()))?;
             r.diagnostics

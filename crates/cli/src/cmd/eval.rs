@@ -91,15 +91,28 @@ fn print_report(r: &impl Report, json: bool) -> CliResult {
     if json {
         return super::print_json(&r.to_json());
     }
-    for (k, v) in r.entries() {
-        let s = match v {
-            Value::Bool(b) => b.to_string(),
-            Value::Int(i) => i.to_string(),
-            Value::Num(x) => format!("{x:.6e}"),
-            Value::Text(t) => t,
-            Value::Null => "-".into(),
-        };
-        println!("{k:<28} {s}");
+    let entries = r.entries();
+    let text = |v: &Value| match v {
+        Value::Bool(b) => b.to_string(),
+        Value::Int(i) => i.to_string(),
+        Value::Num(x) => super::num_text(*x),
+        Value::Text(t) => t.clone(),
+        Value::Null => "-".into(),
+    };
+    let abs_of = |k: &str| {
+        let want = format!("{k}_abs");
+        entries.iter().find(|(n, _)| *n == want).map(|(_, v)| v)
+    };
+    for (k, v) in &entries {
+        match k.strip_suffix("_abs") {
+            // Shown next to its relative value.
+            Some(rel) if entries.iter().any(|(n, _)| n == rel) => continue,
+            Some(_) => println!("{k:<28} {} (input units)", text(v)),
+            None => match abs_of(k) {
+                Some(a) => println!("{k:<28} {} x diagonal = {} (input units)", text(v), text(a)),
+                None => println!("{k:<28} {}", text(v)),
+            },
+        }
     }
     Ok(())
 }

@@ -456,7 +456,11 @@ fn one_shot(kind: MethodKind, a: OneShotArgs) -> CliResult {
     if a.json {
         return print_json(&r);
     }
-    let summary: Vec<String> = r.summary.iter().map(|(k, v)| format!("{k} {v}")).collect();
+    let summary: Vec<String> = r
+        .summary
+        .iter()
+        .map(|(k, v)| format!("{} {}", k.replace('_', " "), super::num_text(*v)))
+        .collect();
     println!(
         "{} on {} ({} points): {} in {:.3} s",
         r.method,
@@ -473,11 +477,54 @@ fn one_shot(kind: MethodKind, a: OneShotArgs) -> CliResult {
             .collect();
         println!("phases: {}", phases.join(", "));
     }
+    if !r.diagnostics.is_empty() {
+        println!("diagnostics (--json prints them whole):");
+    }
     for (k, v) in &r.diagnostics {
-        println!("  {k} = {v}");
+        let unit = if reconbench_harness::store::is_timing(k) && !k.ends_with("_per_second") {
+            " s"
+        } else {
+            ""
+        };
+        println!("  {k} = {}{unit}", diagnostic_text(v));
     }
     println!("wrote {}", r.output);
     Ok(())
+}
+
+/// A diagnostic for the terminal: numbers legible, a long series as its length, ends
+/// and range, a long text cut.
+fn diagnostic_text(v: &serde_json::Value) -> String {
+    use serde_json::Value;
+    let num = |v: &Value| v.as_f64().map_or_else(|| v.to_string(), super::num_text);
+    match v {
+        Value::Number(_) => num(v),
+        Value::Array(a) if a.len() <= 6 => {
+            let items: Vec<String> = a.iter().map(num).collect();
+            format!("[{}]", items.join(", "))
+        }
+        Value::Array(a) => {
+            let xs: Vec<f64> = a.iter().filter_map(Value::as_f64).collect();
+            let (lo, hi) = xs
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+                    (l.min(x), h.max(x))
+                });
+            format!(
+                "{} values: first {}, last {}, range {} .. {}",
+                a.len(),
+                num(&a[0]),
+                num(&a[a.len() - 1]),
+                super::num_text(lo),
+                super::num_text(hi)
+            )
+        }
+        Value::String(t) if t.chars().count() > 160 => {
+            format!("{}...", t.chars().take(160).collect::<String>())
+        }
+        Value::String(t) => t.clone(),
+        other => other.to_string(),
+    }
 }
 
 fn report(a: ReportArgs) -> CliResult {

@@ -39,6 +39,26 @@ impl CliError {
     }
 }
 
+/// A number for people: integers as integers, 4 significant digits in plain decimal
+/// between 1e-4 and 1e7, e-notation outside, `0` for -0.
+pub fn num_text(x: f64) -> String {
+    if !x.is_finite() {
+        return x.to_string();
+    }
+    let a = x.abs();
+    if a == 0.0 {
+        return "0".into();
+    }
+    if x.fract() == 0.0 && a < 1e15 {
+        return format!("{x:.0}");
+    }
+    if (1e-4..1e7).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        return format!("{x:.decimals$}");
+    }
+    format!("{x:.3e}")
+}
+
 /// Collapses a possibly multi-line message into one line.
 fn one_line(e: impl Display) -> String {
     e.to_string()
@@ -125,4 +145,27 @@ pub fn print_json(value: &impl serde::Serialize) -> CliResult {
     let s = serde_json::to_string_pretty(value).map_err(CliError::failure)?;
     println!("{s}");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num_text;
+
+    #[test]
+    fn numbers_read_as_people_write_them() {
+        for (x, want) in [
+            (0.0, "0"),
+            (-0.0, "0"),
+            (3000.0, "3000"),
+            (0.004567958, "0.004568"),
+            (98.4, "98.40"),
+            (0.0005261692, "0.0005262"),
+            (1234567.8, "1234568"),
+            (12345678.9, "1.235e7"),
+            (5e-9, "5.000e-9"),
+            (2.5, "2.500"),
+        ] {
+            assert_eq!(num_text(x), want, "{x}");
+        }
+    }
 }
