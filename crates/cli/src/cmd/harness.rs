@@ -40,7 +40,7 @@ pub enum HarnessCommand {
     List(ListArgs),
     /// Reconstruct a mesh from one point cloud file with a registered method.
     #[command(
-        after_help = "Example:\n  reconbench reconstruct --method reference-mesh cloud.ply -o mesh.ply --set shape=torus --set resolution=48"
+        after_help = "Examples:\n  reconbench gen torus --points 20000 --seed 1 -o torus.ply\n  reconbench reconstruct --method ufm torus.ply -o torus-ufm.ply\n  reconbench reconstruct --method priority-front datasets/real/bunny.ply -o bunny-pf.ply --set threads=2\n  reconbench reconstruct --method reference-mesh torus.ply -o ref.ply --set shape=torus --set resolution=48   # an oracle: the true surface"
     )]
     Reconstruct(OneShotArgs),
     /// Estimate normals of one point cloud file with a registered method.
@@ -75,7 +75,7 @@ pub enum HarnessCommand {
     Compare(CompareArgs),
     /// Merge shard results (files or directories) into one results directory.
     #[command(
-        after_help = "Example:\n  reconbench merge results/big --out results/big   # merges results.shard-*.jsonl"
+        after_help = "Example:\n  reconbench merge results/big --out results/big-all   # every results.shard-*.jsonl in results/big\n  reconbench merge a/results.jsonl b/results.jsonl --out merged"
     )]
     Merge(MergeArgs),
 }

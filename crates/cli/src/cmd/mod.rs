@@ -81,11 +81,11 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Print counts and the topology report of a mesh or point cloud file.
-    #[command(after_help = "Example:\n  reconbench info datasets/double_torus.ply --json")]
+    #[command(after_help = "Example:\n  reconbench info datasets/real/rocker-arm.ply --json")]
     Info(info::InfoArgs),
     /// Convert between PLY, OBJ, OFF, STL and XYZ/PTS (chosen by extension).
     #[command(
-        after_help = "Example:\n  reconbench convert bunny.obj bunny.ply --ply-encoding ascii"
+        after_help = "Example:\n  reconbench convert datasets/real/fandisk.ply fandisk.obj\n  reconbench convert fandisk.obj fandisk-ascii.ply --ply-encoding ascii"
     )]
     Convert(info::ConvertArgs),
     /// Generate a ground-truth cloud (positions, GT normals, feature distance, source
