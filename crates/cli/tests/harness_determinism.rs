@@ -95,3 +95,22 @@ fn provenance_names_the_commit_of_the_binary_wherever_it_runs() {
         "{commit} is not a commit of this repository"
     );
 }
+
+#[test]
+fn a_method_timing_can_be_an_expectation() {
+    let dir = tempfile::tempdir().unwrap();
+    let exp = write(
+        dir.path(),
+        "rate.toml",
+        "[[datasets]]\nshape = \"torus\"\npoints = 1500\n[[methods]]\nname = \"priority-front\"\n[report]\nplots = false\nrenders = false\n[[expect]]\nmetric = \"cost.triangles_per_second\"\nvalue = 1.0\ntol = \"rel:1e12\"\n",
+    );
+    let out = ok(&reconbench(&[
+        "run",
+        exp.to_str().unwrap(),
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+        "--json",
+    ]));
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["expect_misses"], 0, "{out}");
+}

@@ -133,6 +133,18 @@ pub fn aggregate(rows: &[Row]) -> Vec<Group> {
                     cost.insert(name.to_string(), s);
                 }
             }
+            // The methods' own timings (`cost.timings`), for `[[expect]] metric = "cost.NAME"`.
+            let mut timings: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+            for r in &ok {
+                for (k, v) in &r.cost.timings {
+                    timings.entry(k).or_default().push(*v);
+                }
+            }
+            for (k, v) in timings {
+                if let Some(s) = Stat::of(&v) {
+                    cost.entry(k.to_string()).or_insert(s);
+                }
+            }
             let dists: Vec<&Dist> = ok.iter().filter_map(|r| r.dist.as_ref()).collect();
             let dist = (!dists.is_empty()).then(|| {
                 let m = |f: fn(&Dist) -> f64| {
