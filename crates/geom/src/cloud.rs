@@ -242,6 +242,19 @@ impl PointCloud {
 /// extent.
 pub const WORKING_SCALE_BITS: i32 = 64;
 
+/// True when all points lie on one line (or coincide), tested exactly in floating point
+/// on the cross products (a non-zero cross product proves non-collinearity): only then
+/// may a method return no faces or only zero-length normals on distinct points.
+pub fn all_collinear(points: &[DVec3]) -> bool {
+    let Some(&a) = points.first() else {
+        return true;
+    };
+    let Some(&b) = points.iter().find(|&&p| p != a) else {
+        return true;
+    };
+    points.iter().all(|&p| (b - a).cross(p - a) == DVec3::ZERO)
+}
+
 /// The power-of-two exponent `s` that brings the largest |coordinate| of `positions`
 /// into `[1/2, 1)`, or `None` when it is already within `2^±WORKING_SCALE_BITS` (or
 /// every coordinate is zero). Multiplying by `2^s` is exact unless coordinates more

@@ -115,18 +115,6 @@ pub fn check_k(name: &str, k: usize, min: usize) -> Result<(), MethodError> {
     Ok(())
 }
 
-/// True when all points lie on one line (or coincide): only then may every normal be
-/// zero-length.
-fn all_collinear(points: &[DVec3]) -> bool {
-    let Some(&a) = points.first() else {
-        return true;
-    };
-    let Some(&b) = points.iter().find(|&&p| p != a) else {
-        return true;
-    };
-    points.iter().all(|&p| (b - a).cross(p - a) == DVec3::ZERO)
-}
-
 /// Orients (when `orient_k > 0`) and packages the normals with diagnostics; fails when
 /// every normal is zero-length on points that are not collinear.
 pub fn finish(
@@ -137,7 +125,7 @@ pub fn finish(
 ) -> Result<Normals, MethodError> {
     let mut diagnostics = reconbench_geom::method::Diagnostics::new();
     let degenerate = normals.iter().filter(|n| **n == DVec3::ZERO).count();
-    if degenerate == normals.len() && !all_collinear(points) {
+    if degenerate == normals.len() && !reconbench_geom::cloud::all_collinear(points) {
         return Err(MethodError::Failed(format!(
             "every one of the {} normals is zero-length although the points are not \
              collinear",

@@ -69,7 +69,7 @@ pub fn check_not_collapsed(
     mesh: &TriMesh,
     points: &[DVec3],
 ) -> Result<(), MethodError> {
-    if mesh.n_faces() > 0 || all_collinear(points) {
+    if mesh.n_faces() > 0 || reconbench_geom::cloud::all_collinear(points) {
         return Ok(());
     }
     Err(MethodError::Failed(format!(
@@ -84,7 +84,7 @@ pub fn check_normals_not_collapsed(
     normals: &[DVec3],
     points: &[DVec3],
 ) -> Result<(), MethodError> {
-    if normals.iter().any(|n| *n != DVec3::ZERO) || all_collinear(points) {
+    if normals.iter().any(|n| *n != DVec3::ZERO) || reconbench_geom::cloud::all_collinear(points) {
         return Ok(());
     }
     Err(MethodError::Failed(format!(
@@ -92,18 +92,6 @@ pub fn check_normals_not_collapsed(
          collinear",
         normals.len()
     )))
-}
-
-/// True when all points lie on one line (or coincide), tested exactly in floating point
-/// on the cross products (a non-zero cross product proves non-collinearity).
-fn all_collinear(points: &[DVec3]) -> bool {
-    let Some(&a) = points.first() else {
-        return true;
-    };
-    let Some(&b) = points.iter().find(|&&p| p != a) else {
-        return true;
-    };
-    points.iter().all(|&p| (b - a).cross(p - a) == DVec3::ZERO)
 }
 
 #[cfg(test)]
