@@ -32,9 +32,10 @@ pub fn register_fonts() {
     });
 }
 
-/// A fixed qualitative palette (Tableau 10 and its lighter half): a method keeps its
-/// colour in every plot and every report, see [`method_colour`].
-const PALETTE: [RGBColor; 16] = [
+/// A fixed qualitative palette (Tableau 10, the dark half of Tableau 20b, then the
+/// light half of Tableau 20): a method keeps its colour in every plot and every report,
+/// see [`method_colour`].
+const PALETTE: [RGBColor; 30] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -46,17 +47,36 @@ const PALETTE: [RGBColor; 16] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
     RGBColor(57, 59, 121),
-    RGBColor(173, 73, 74),
     RGBColor(99, 121, 57),
     RGBColor(140, 109, 49),
+    RGBColor(132, 60, 57),
     RGBColor(123, 65, 115),
     RGBColor(82, 84, 163),
+    RGBColor(140, 162, 82),
+    RGBColor(189, 158, 57),
+    RGBColor(173, 73, 74),
+    RGBColor(165, 81, 148),
+    RGBColor(174, 199, 232),
+    RGBColor(255, 187, 120),
+    RGBColor(152, 223, 138),
+    RGBColor(255, 152, 150),
+    RGBColor(197, 176, 213),
+    RGBColor(196, 156, 148),
+    RGBColor(247, 182, 210),
+    RGBColor(199, 199, 199),
+    RGBColor(219, 219, 141),
+    RGBColor(158, 218, 229),
 ];
 
-/// The colour of a method label: an FNV-1a hash of the label into [`PALETTE`], so it
-/// depends on the label alone (not on which other methods a report holds or their
-/// order). Two labels may share a colour; legends and box labels still tell them apart.
+/// The colour of a method label. A registered method's name gets the palette slot of its
+/// place in the registry, so no two registered methods share a colour; any other label
+/// (a pipeline, a custom label) an FNV-1a hash into [`PALETTE`]. Either way it depends
+/// on the label alone, not on which other methods a report holds or their order.
 pub fn method_colour(label: &str) -> RGBColor {
+    let visible = crate::registry::registry().iter().filter(|e| !e.hidden);
+    if let Some(i) = visible.map(|e| e.name).position(|n| n == label) {
+        return PALETTE[i % PALETTE.len()];
+    }
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in label.bytes() {
         h ^= u64::from(b);
@@ -497,6 +517,28 @@ pub fn write(plot: &Plot, stem: &Path, size: (u32, u32)) -> Result<(PathBuf, Pat
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn registered_methods_never_share_a_colour() {
+        let names: Vec<&str> = crate::registry::registry()
+            .iter()
+            .filter(|e| !e.hidden)
+            .map(|e| e.name)
+            .collect();
+        assert!(names.len() <= PALETTE.len(), "grow the palette");
+        let colours: std::collections::HashSet<(u8, u8, u8)> = names
+            .iter()
+            .map(|n| {
+                let c = method_colour(n);
+                (c.0, c.1, c.2)
+            })
+            .collect();
+        assert_eq!(colours.len(), names.len());
+        assert_ne!(
+            method_colour("priority-front").0,
+            method_colour("tight-cocone").0
+        );
+    }
 
     #[test]
     fn slope_of_a_power_law() {
