@@ -70,7 +70,7 @@ const PALETTE: [RGBColor; 30] = [
 
 /// The colour of a method label. A registered method's name gets the palette slot of its
 /// place in the registry, so no two registered methods share a colour; any other label
-/// (a pipeline, a custom label) an FNV-1a hash into [`PALETTE`]. Either way it depends
+/// (a pipeline, a custom label) an FNV-1a hash into the palette. Either way it depends
 /// on the label alone, not on which other methods a report holds or their order.
 pub fn method_colour(label: &str) -> RGBColor {
     let visible = crate::registry::registry().iter().filter(|e| !e.hidden);
