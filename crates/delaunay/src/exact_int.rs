@@ -9,7 +9,7 @@ use crate::point::P3;
 
 /// Mantissa and exponent of a non-zero finite double: `x = m · 2^e`, `m` odd.
 #[inline]
-fn decompose(x: f64) -> (i64, i32) {
+pub(crate) fn decompose(x: f64) -> (i64, i32) {
     let bits = x.to_bits();
     let exp = ((bits >> 52) & 0x7ff) as i32;
     let frac = bits & ((1u64 << 52) - 1);

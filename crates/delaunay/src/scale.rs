@@ -36,15 +36,7 @@ pub(crate) const MAX_SPAN_BITS: i32 = WINDOW_HIGH - WINDOW_LOW;
 
 /// Exponent of the lowest set bit of a non-zero finite `x` (`x = m · 2^q`, `m` odd).
 fn lowest_bit(x: f64) -> i32 {
-    let bits = x.to_bits();
-    let exp = ((bits >> 52) & 0x7ff) as i32;
-    let frac = bits & ((1u64 << 52) - 1);
-    let (m, e) = if exp == 0 {
-        (frac, -1074)
-    } else {
-        (frac | (1u64 << 52), exp - 1075)
-    };
-    e + m.trailing_zeros() as i32
+    crate::exact_int::decompose(x).1
 }
 
 /// Smallest `e` with `|x| < 2^e`, for a non-zero finite `x`.
