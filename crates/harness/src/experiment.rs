@@ -1298,7 +1298,7 @@ mod tests {
             ),
             (
                 format!(
-                    "{base}{data}[[expect]]\nwhere = {{ methd = \"x\" }}\nmetric = \"x\"\nvalue = 1\n"
+                    "{base}{data}[[expect]]\nwhere = {{ methd = \"x\" }}\nmetric = \"hausdorff\"\nvalue = 1\n"
                 ),
                 "unknown selector key 'methd'",
             ),
