@@ -159,6 +159,18 @@ pub trait Filter: Send + Sync + std::fmt::Debug {
 /// ([`FeatureClass`] as integers) for later steps.
 pub const FEATURE_CHANNEL: &str = "feature";
 
+/// Name of the point channel (integer labels) in which a merging filter tags where each
+/// output point came from: [`ORIGIN_SCAN`], [`ORIGIN_NURBS`] or [`ORIGIN_COLLAR`] (the
+/// `blend` filter, seed 002 §7: the scanned points, the NURBS samples and the collar
+/// between them). Metrics of the blend region read it.
+pub const ORIGIN_CHANNEL: &str = "origin";
+/// [`ORIGIN_CHANNEL`] value of a point of the input scan.
+pub const ORIGIN_SCAN: i64 = 0;
+/// [`ORIGIN_CHANNEL`] value of a sample of a designed (NURBS) surface.
+pub const ORIGIN_NURBS: i64 = 1;
+/// [`ORIGIN_CHANNEL`] value of a point the filter created to join the two.
+pub const ORIGIN_COLLAR: i64 = 2;
+
 /// Name of the [`Diagnostic::Number`] a reconstructor sets to 0 when its mesh does not
 /// interpolate the input (new vertices, as Poisson's): the evaluator then reports no
 /// vertex counts, Delta F or refused-point metrics for it, which count input points as
