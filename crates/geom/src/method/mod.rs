@@ -171,6 +171,19 @@ pub const ORIGIN_NURBS: i64 = 1;
 /// [`ORIGIN_CHANNEL`] value of a point the filter created to join the two.
 pub const ORIGIN_COLLAR: i64 = 2;
 
+/// Scalar channels a blending filter attaches so the collar metrics can chart the blend
+/// region around a tube: per point the angle around the tube axis (rad), the distance
+/// from the axis, that distance minus the tube radius, the distance to the nearest input
+/// point (the height above the scan) and the signed position along the axis from where
+/// it meets the part (all lengths in mean input spacings).
+pub const BLEND_CHART_CHANNELS: [&str; 5] = [
+    "blend_theta",
+    "blend_radial_sp",
+    "blend_offset_sp",
+    "blend_height_sp",
+    "blend_axial_sp",
+];
+
 /// Name of the [`Diagnostic::Number`] a reconstructor sets to 0 when its mesh does not
 /// interpolate the input (new vertices, as Poisson's): the evaluator then reports no
 /// vertex counts, Delta F or refused-point metrics for it, which count input points as
