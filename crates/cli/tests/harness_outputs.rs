@@ -106,13 +106,23 @@ fn same_seed_same_rows_and_every_output_is_written() {
         (400, 300)
     );
     assert!(plots.join("normals_errors_box_box-n-300.png").exists());
-    // Renders: reconstructions of seed 0, three views plus the legend.
+    // Renders: the data of each reconstruction of seed 0, and one image per
+    // configuration with its two methods side by side, three views each.
     let renders: Vec<_> = std::fs::read_dir(a.join("renders"))
         .unwrap()
         .flatten()
+        .map(|e| e.path())
         .collect();
-    assert_eq!(renders.len(), 8, "2 sizes x 2 noise x 2 resolutions");
-    assert_eq!(png_size(&renders[0].path()), (3 * 64 + 150, 64));
+    let ext = |e: &str| {
+        renders
+            .iter()
+            .filter(|p| p.extension().is_some_and(|x| x == e))
+    };
+    assert_eq!(ext("rbr").count(), 8, "2 sizes x 2 noise x 2 resolutions");
+    let images: Vec<_> = ext("png").collect();
+    assert_eq!(images.len(), 4, "2 sizes x 2 noise");
+    let (w, h) = png_size(images[0]);
+    assert!(w > 2 * 64 && h > 3 * 64, "{w} x {h}");
     // The report links everything and flags the miss.
     let report = std::fs::read_to_string(a.join("report.md")).unwrap();
     for needle in [
@@ -220,4 +230,26 @@ fn baseline_compare_and_shards() {
     assert!(merged.contains("32 written"), "{merged}");
     assert_same_rows(&sh, &full);
     assert!(sh.join("report.md").exists());
+    // Merged elsewhere (shards from other machines), the render data comes along and
+    // the report draws the renders from it.
+    let elsewhere = dir.path().join("elsewhere");
+    ok(&reconbench(&[
+        "merge",
+        sh.to_str().unwrap(),
+        "--out",
+        elsewhere.to_str().unwrap(),
+    ]));
+    let count = |ext: &str| {
+        std::fs::read_dir(elsewhere.join("renders"))
+            .unwrap()
+            .flatten()
+            .filter(|e| e.path().extension().is_some_and(|x| x == ext))
+            .count()
+    };
+    assert_eq!((count("rbr"), count("png")), (8, 4));
+    let report = std::fs::read_to_string(elsewhere.join("report.md")).unwrap();
+    assert!(
+        report.contains("## Renders") && !report.contains("No render data"),
+        "{report}"
+    );
 }

@@ -39,7 +39,8 @@ pub struct Outcome {
     pub steps: Vec<(String, f64)>,
     /// Metric time.
     pub metrics_s: f64,
-    /// Mesh and per-vertex error, for reconstructions.
+    /// What a render of the reconstruction needs (only when asked for, see
+    /// [`execute_with_render`]).
     pub render: Option<RenderData>,
 }
 
@@ -130,6 +131,18 @@ fn keep_metrics(row: BTreeMap<String, f64>) -> BTreeMap<String, f64> {
 /// Runs one cell in this process: generate, run the method, evaluate. Errors are the
 /// reasons recorded in the row (status `error`).
 pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, String> {
+    execute_with_render(cell, budget, false)
+}
+
+/// [`execute`], and with `render` the [`RenderData`] of a reconstruction in
+/// [`Outcome::render`]: its mesh, the distance at its vertices and face centroids, its
+/// boundary edges and defective faces (the self-intersection search runs a second time
+/// for it, so only the cells that render pay for it).
+pub fn execute_with_render(
+    cell: &Cell,
+    budget: Duration,
+    render: bool,
+) -> std::result::Result<Outcome, String> {
     let spec = &cell.spec;
     let entry = registry::find(&spec.method).map_err(|e| e.to_string())?;
     let shape: Option<Arc<dyn Shape>> =
@@ -289,6 +302,13 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
             o.distance.vertex_error = true;
             let Some(reference) = &reference else {
                 out.metrics = keep_metrics(without_ground_truth(&r.mesh, &o));
+                if render {
+                    // No truth: the surface is grey, the defects are still marked.
+                    out.render = Some(
+                        RenderData::from_mesh(&r.mesh, &[], &[])
+                            .map_err(|e| format!("render: {e}"))?,
+                    );
+                }
                 if !interpolating(&r.diagnostics) {
                     drop_vertex_claims(&mut out.metrics);
                 }
@@ -337,12 +357,24 @@ pub fn execute(cell: &Cell, budget: Duration) -> std::result::Result<Outcome, St
                 .or_else(|| Dist::of("vertex distance (diag)", &verr));
             out.metrics_s = t.elapsed().as_secs_f64();
             out.diagnostics = diagnostics_json(&r.diagnostics);
-            out.render = Some(RenderData {
-                vertices: r.mesh.vertices().to_vec(),
-                faces: r.mesh.faces().to_vec(),
-                values: verr,
-                title: "distance / diag".into(),
-            });
+            if render {
+                let centres: Vec<reconbench_geom::DVec3> = (0..r.mesh.n_faces())
+                    .map(|f| {
+                        let [a, b, c] = r.mesh.triangle(f);
+                        (a + b + c) / 3.0
+                    })
+                    .collect();
+                let ferr: Vec<f64> = reference
+                    .distances(&centres)
+                    .map_err(|e| format!("metrics: {e}"))?
+                    .into_iter()
+                    .map(|x| x / diag)
+                    .collect();
+                out.render = Some(
+                    RenderData::from_mesh(&r.mesh, &verr, &ferr)
+                        .map_err(|e| format!("render: {e}"))?,
+                );
+            }
         }
     }
     out.phases = ctx.phases();

@@ -178,11 +178,14 @@ pub struct ReportOptions {
     pub tables: Vec<String>,
     /// Write plots.
     pub plots: bool,
-    /// Write error renders of reconstructions (seed index 0 of each configuration).
+    /// Write error renders of reconstructions (seed index 0 of each configuration), one
+    /// image per configuration with the methods side by side.
     pub renders: bool,
-    /// Top of the fixed colour scale of renders (fraction of the diagonal).
-    pub render_max: f64,
-    /// Height in pixels of each render view.
+    /// Top of a fixed colour scale of renders (fraction of the diagonal), to compare
+    /// renders across reports; by default each report picks its own scale from its
+    /// meshes' distances (`render::Scale::robust`).
+    pub render_max: Option<f64>,
+    /// Side in pixels of each render view.
     pub render_size: u32,
     /// Plot size in pixels `[width, height]`.
     pub plot_size: [u32; 2],
@@ -197,7 +200,7 @@ impl Default for ReportOptions {
             tables: vec!["md".into(), "tex".into(), "csv".into()],
             plots: true,
             renders: true,
-            render_max: 0.01,
+            render_max: None,
             render_size: 240,
             plot_size: [800, 500],
         }
@@ -487,7 +490,7 @@ fn validate_report(r: &ReportOptions, swept: &[String]) -> Result<()> {
             }
         )));
     }
-    if !(r.render_max.is_finite() && r.render_max > 0.0) {
+    if r.render_max.is_some_and(|m| !(m.is_finite() && m > 0.0)) {
         return Err(HarnessError::input("report.render_max must be > 0"));
     }
     if r.render_size < 16

@@ -15,6 +15,7 @@ use crate::experiment::{Expect, Experiment, ReportOptions};
 use crate::inputs::FileKind;
 use crate::plots::{BoxEntry, BoxPlot, LinePlot, Plot, Series, loglog_slope};
 use crate::registry::MethodKind;
+use crate::render::{Panel, RenderData, Scale, render_comparison};
 use crate::runner::Manifest;
 use crate::store::{Row, Status, read_rows};
 use crate::tables::{self, TIME_COLUMN, fmt_num};
@@ -57,6 +58,9 @@ pub struct ReportOutput {
     pub tables: Vec<PathBuf>,
     /// Plot files.
     pub plots: Vec<PathBuf>,
+    /// Render images (one per configuration).
+    #[serde(default)]
+    pub renders: Vec<PathBuf>,
     /// Published-figure checks.
     pub expect: Vec<ExpectResult>,
     /// Rows used.
@@ -282,7 +286,7 @@ pub fn write_report(
         )?);
     }
     let plot_files = list_files(&dir.join("plots"));
-    write_renders(&mut md, &rows, opts);
+    let render_files = write_renders(&mut md, dir, &rows, opts)?;
     write_failed(&mut md, &failed);
 
     let report = dir.join("report.md");
@@ -291,6 +295,7 @@ pub fn write_report(
         report,
         tables: table_files,
         plots: plot_files,
+        renders: render_files,
         expect,
         rows: rows.len(),
         failed: failed.len(),
@@ -569,28 +574,167 @@ fn write_kind_section(
     Ok(table_files)
 }
 
-/// The error renders of the rows that have one.
-fn write_renders(md: &mut String, rows: &[Row], opts: &ReportOptions) {
-    let renders: Vec<&Row> = rows.iter().filter(|r| r.render.is_some()).collect();
-    if renders.is_empty() {
-        return;
+/// The renders: one image per configuration (dataset x perturbation) with the
+/// reconstruction methods side by side, drawn from the render data the workers stored
+/// (`renders/<key>.rbr`), all on one colour scale: the experiment's `render_max` when
+/// given, else [`Scale::robust`] over every mesh of the report. Rows of an older
+/// version (a per-cell PNG, no data file) or whose file is gone are left out with a
+/// note; nothing here fails the report but a file that cannot be written.
+fn write_renders(
+    md: &mut String,
+    dir: &Path,
+    rows: &[Row],
+    opts: &ReportOptions,
+) -> Result<Vec<PathBuf>> {
+    let recon: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.spec.kind == MethodKind::Reconstruct)
+        .collect();
+    if !opts.renders || recon.is_empty() {
+        return Ok(Vec::new());
     }
+    md.push_str("## Renders\n\n");
+    let Some(seed) = recon
+        .iter()
+        .filter(|r| r.render.is_some())
+        .map(|r| r.spec.seed_index)
+        .min()
+    else {
+        md.push_str("No reconstruction of this run has render data (every one failed, or the run had `renders = false`).\n\n");
+        return Ok(Vec::new());
+    };
+    let shown: Vec<&Row> = recon
+        .iter()
+        .copied()
+        .filter(|r| r.spec.seed_index == seed)
+        .collect();
+    let mut notes = Vec::new();
+    let mut data: BTreeMap<&str, RenderData> = BTreeMap::new();
+    let mut old_format = 0;
+    for r in &shown {
+        let Some(rel) = r.render.as_deref() else {
+            continue;
+        };
+        if !rel.ends_with(".rbr") {
+            old_format += 1;
+            continue;
+        }
+        match RenderData::load(&dir.join(rel)) {
+            Ok(d) => {
+                data.insert(r.key.as_str(), d);
+            }
+            Err(e) => notes.push(format!(
+                "{} / {} / {}: {e}",
+                r.labels.dataset, r.labels.perturb, r.labels.method
+            )),
+        }
+    }
+    if old_format > 0 {
+        notes.push(format!(
+            "{old_format} rows name a render of an older version (a PNG on a fixed scale, without the data to redraw it); rerun the experiment (`--fresh`) to draw them"
+        ));
+    }
+    if data.is_empty() {
+        let _ = writeln!(md, "No render data to draw:\n");
+        for n in &notes {
+            let _ = writeln!(md, "- {n}");
+        }
+        md.push('\n');
+        return Ok(Vec::new());
+    }
+    let meshes: Vec<&RenderData> = data.values().collect();
+    let scale = opts
+        .render_max
+        .map_or_else(|| Scale::robust(&meshes), Scale::fixed);
+    let how = match (opts.render_max, scale.percentile_95) {
+        (Some(_), _) => "fixed by the experiment (`report.render_max`)".to_string(),
+        (None, Some(p)) => format!(
+            "the 95th percentile ({}) of the distances of all {} meshes below, each mesh weighted equally, rounded up; larger distances get the top colour",
+            fmt_num(p),
+            meshes.len()
+        ),
+        (None, None) => "a default (no mesh has a measured distance)".to_string(),
+    };
     let _ = writeln!(
         md,
-        "## Renders\n\nReconstructions coloured by distance to the true surface (fraction of the diagonal, fixed scale 0 to {} for every method), seed index {}, three viewpoints.\n",
-        fmt_num(opts.render_max),
-        renders.iter().map(|r| r.spec.seed_index).min().unwrap_or(0)
+        "Seed index {seed}, one image per configuration, one column per method, each seen from the front, the side and the top. Colour: distance of the mesh to the true surface (fraction of the bounding-box diagonal), one scale for the whole report, 0 to {} ({how}). Red lines: boundary edges (holes, open rims); magenta: faces that intersect another face or sit on an edge of three or more faces. Each heading gives the method's Hausdorff distance and its numbers of boundary edges, self-intersecting face pairs and non-manifold edges.\n",
+        fmt_num(scale.max)
     );
-    for r in renders {
+    let mut groups: Vec<((&str, &str), Vec<&Row>)> = Vec::new();
+    for r in &shown {
+        let k = (r.labels.dataset.as_str(), r.labels.perturb.as_str());
+        match groups.iter_mut().find(|(g, _)| *g == k) {
+            Some((_, v)) => v.push(r),
+            None => groups.push((k, vec![r])),
+        }
+    }
+    let mut files = Vec::new();
+    let mut used = BTreeSet::new();
+    for ((dataset, perturb), rs) in groups {
+        let lines: Vec<Vec<String>> = rs
+            .iter()
+            .map(|r| panel_lines(r, data.get(r.key.as_str())))
+            .collect();
+        let panels: Vec<Panel<'_>> = rs
+            .iter()
+            .zip(&lines)
+            .map(|(r, l)| Panel {
+                title: r.labels.method.as_str(),
+                lines: l,
+                data: data.get(r.key.as_str()),
+            })
+            .collect();
+        let title = format!("{dataset} / {perturb} (seed index {seed})");
+        let cmp = render_comparison(&title, &panels, &scale, opts.render_size)?;
+        let mut stem = format!("{}_{}", slug(dataset), slug(perturb));
+        let base = stem.clone();
+        let mut n = 2;
+        while !used.insert(stem.clone()) {
+            stem = format!("{base}-{n}");
+            n += 1;
+        }
+        let rel = format!("renders/{stem}.png");
+        let path = dir.join(&rel);
+        cmp.image.save_png(&path)?;
         let _ = writeln!(
             md,
-            "**{} / {} / {}**\n\n![]({})\n",
-            r.labels.dataset,
-            r.labels.perturb,
-            r.labels.method,
-            r.render.as_deref().unwrap_or_default()
+            "**{dataset} / {perturb}**\n\n![{dataset} / {perturb}]({rel})\n"
         );
+        files.push(path);
     }
+    if !notes.is_empty() {
+        md.push_str("Left out:\n\n");
+        for n in &notes {
+            let _ = writeln!(md, "- {n}");
+        }
+        md.push('\n');
+    }
+    Ok(files)
+}
+
+/// The heading lines of a render panel: the row's Hausdorff distance and defect counts
+/// (the metrics of the row, the same code as the tables), or why there is no mesh.
+fn panel_lines(r: &Row, data: Option<&RenderData>) -> Vec<String> {
+    if r.status != Status::Ok {
+        return vec![
+            format!("failed ({})", r.status.as_str()),
+            r.error.clone().unwrap_or_default(),
+        ];
+    }
+    if data.is_none() {
+        return vec!["no render data".into()];
+    }
+    let m = |k: &str| r.metrics.get(k).copied();
+    let count = |k: &str| m(k).map_or("–".into(), |x| format!("{x:.0}"));
+    vec![
+        format!("Hausdorff {}", m("hausdorff").map_or("–".into(), fmt_num)),
+        format!("boundary edges {}", count("boundary_edges")),
+        format!(
+            "self-int. {}, non-manif. {}",
+            count("self_intersections"),
+            count("non_manifold_edges")
+        ),
+    ]
 }
 
 /// The failed cells with their reasons.

@@ -480,7 +480,8 @@ fn duration_text(s: f64) -> String {
     }
 }
 
-/// The render a reconstruction cell at the lowest seed index asks for, if renders are on.
+/// The render data a reconstruction cell at the lowest seed index writes, if renders
+/// are on (the report draws the images from it).
 fn render_request(
     exp: &Experiment,
     opts: &RunOptions,
@@ -491,14 +492,12 @@ fn render_request(
     (report.renders
         && cell.spec.kind == MethodKind::Reconstruct
         && cell.spec.seed_index == min_seed)
-        .then(|| RenderRequest {
-            path: opts
-                .out_dir
-                .join("renders")
-                .join(format!("{}.png", cell.key)),
-            rel: format!("renders/{}.png", cell.key),
-            max: report.render_max,
-            size: report.render_size,
+        .then(|| {
+            let rel = crate::render::data_path(&cell.key);
+            RenderRequest {
+                path: opts.out_dir.join(&rel),
+                rel,
+            }
         })
 }
 
@@ -944,13 +943,17 @@ pub fn merge(inputs: &[PathBuf], out_dir: &Path) -> Result<MergeSummary> {
         ));
     }
     let mut by_key: BTreeMap<String, Row> = BTreeMap::new();
+    // The directory each kept row came from, for its render data file.
+    let mut source: BTreeMap<String, PathBuf> = BTreeMap::new();
     let mut warnings = Vec::new();
     let mut total = 0;
     for f in &files {
         let (rows, skipped) = read_rows(f)?;
         warnings.extend(skipped);
         total += rows.len();
+        let dir = f.parent().map(Path::to_path_buf).unwrap_or_default();
         for r in rows {
+            source.insert(r.key.clone(), dir.clone());
             if let Some(old) = by_key.get(&r.key)
                 && old.spec != r.spec
             {
@@ -994,6 +997,11 @@ pub fn merge(inputs: &[PathBuf], out_dir: &Path) -> Result<MergeSummary> {
         crate::error::write_atomic(&out_dir.join("manifest.json"), text.as_bytes())?;
     }
     write_rows(&out, &rows)?;
+    for r in &rows {
+        if let (Some(rel), Some(from)) = (&r.render, source.get(&r.key)) {
+            warnings.extend(crate::render::copy_data(from, out_dir, rel));
+        }
+    }
     Ok(MergeSummary {
         inputs: files,
         rows_read: total,

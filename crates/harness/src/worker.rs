@@ -38,17 +38,15 @@ pub const REPLY_PREFIX: &str = "RECONBENCH-REPLY ";
 /// Prefix of the panic line on stderr.
 pub const PANIC_PREFIX: &str = "RECONBENCH-PANIC ";
 
-/// A render the runner asks for.
+/// The render data the runner asks for: the worker writes the cell's
+/// [`RenderData`](crate::render::RenderData) to `path`; the report draws it later, on
+/// the scale of all the report's meshes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RenderRequest {
-    /// Where to write the PNG.
+    /// Where to write the render data file.
     pub path: PathBuf,
     /// Path recorded in the row (relative to the results directory).
     pub rel: String,
-    /// Top of the fixed colour scale (fraction of the diagonal).
-    pub max: f64,
-    /// Height of each view in pixels.
-    pub size: u32,
 }
 
 /// What the runner sends.
@@ -85,7 +83,7 @@ pub struct Reply {
 /// wraps it with stdin/stdout).
 pub fn handle(req: &Request) -> Reply {
     let budget = Duration::from_secs_f64(req.timeout_s.max(0.001));
-    let out = cell::execute(&req.cell, budget);
+    let out = cell::execute_with_render(&req.cell, budget, req.render.is_some());
     let (rss, peak) = rss_mib(None).unwrap_or((0.0, 0.0));
     let _ = rss;
     let mut reply = match out {
@@ -93,9 +91,7 @@ pub fn handle(req: &Request) -> Reply {
             let mut render = None;
             let mut error = None;
             if let (Some(r), Some(data)) = (&req.render, &o.render) {
-                match crate::render::render_error_views(data, r.max, r.size)
-                    .and_then(|img| img.save_png(&r.path))
-                {
+                match data.save(&r.path) {
                     Ok(()) => render = Some(r.rel.clone()),
                     Err(e) => error = Some(format!("render failed: {e}")),
                 }
