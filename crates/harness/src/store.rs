@@ -164,7 +164,8 @@ pub struct Row {
     /// Per-point error distribution.
     #[serde(default)]
     pub dist: Option<Dist>,
-    /// Relative path of the render, if one was made.
+    /// Relative path of the render data file (`renders/<key>.rbr`), if one was written;
+    /// the report draws the images from it.
     #[serde(default)]
     pub render: Option<String>,
     /// Machine-dependent measurements.

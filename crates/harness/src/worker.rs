@@ -73,7 +73,7 @@ pub struct Reply {
     pub diagnostics: BTreeMap<String, Value>,
     /// Per-point error distribution.
     pub dist: Option<Dist>,
-    /// Render written (relative path).
+    /// Render data written (relative path).
     pub render: Option<String>,
     /// Cost (the runner fills in `wall_s`).
     pub cost: Cost,
