@@ -49,7 +49,9 @@ install_packages() {
     export DEBIAN_FRONTEND=noninteractive
     local out
     out="$(mktemp)"
-    if ! { apt-get update -qq && apt-get install -y -qq --no-install-recommends \
+    # Bounded: without a reachable package registry apt-get would retry for minutes.
+    local apt=(timeout 240 apt-get -o Acquire::http::Timeout=20 -o Acquire::Retries=1)
+    if ! { "${apt[@]}" update -qq && "${apt[@]}" install -y -qq --no-install-recommends \
         slurmctld slurmd slurm-client munge; } >"$out" 2>&1; then
         cat "$out" >&2
         rm -f "$out"
