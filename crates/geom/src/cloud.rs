@@ -263,13 +263,22 @@ pub fn all_collinear(points: &[DVec3]) -> bool {
 /// leaves every fraction of the bounding-box diagonal, every angle and every normal
 /// unchanged: methods whose parameters are such fractions give the same result.
 pub fn working_scale_exponent(positions: &[DVec3]) -> Option<i32> {
+    working_scale_exponent_within(positions, WORKING_SCALE_BITS)
+}
+
+/// [`working_scale_exponent`] with its own range `2^±bits` (`bits` in `0..=64`): a
+/// method with narrower arithmetic (an `f32` stage, say) moves every cloud whose largest
+/// |coordinate| lies outside `[2^-bits, 2^bits]` into `[1/2, 1)`.
+pub fn working_scale_exponent_within(positions: &[DVec3], bits: i32) -> Option<i32> {
+    let bits = bits.clamp(0, WORKING_SCALE_BITS);
     let m = positions
         .iter()
         .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-    let lim = 2f64.powi(WORKING_SCALE_BITS);
+    let lim = 2f64.powi(bits);
     if m == 0.0 || (m >= 1.0 / lim && m <= lim) {
         return None;
     }
+    let lim = 2f64.powi(WORKING_SCALE_BITS);
     // frexp: m = f · 2^e with f in [1/2, 1); subnormals are first lifted by 2^64.
     let (m, lift) = if m < f64::MIN_POSITIVE {
         (m * lim, WORKING_SCALE_BITS)
@@ -311,6 +320,23 @@ mod tests {
             let (c, s2) = cloud.at_working_scale().unwrap();
             assert_eq!((c.positions(), s2), (&q[..], s));
         }
+    }
+
+    #[test]
+    fn a_narrower_working_range_moves_more_clouds() {
+        let pts = |f: f64| vec![DVec3::new(0.75 * f, -0.1 * f, 0.0)];
+        assert_eq!(working_scale_exponent_within(&pts(1.0), 32), None);
+        assert_eq!(working_scale_exponent_within(&pts(2f64.powi(31)), 32), None);
+        // 0.75 * 2^40 lies outside 2^32: moved into [1/2, 1) by 2^-40.
+        assert_eq!(working_scale_exponent_within(&pts(2f64.powi(40)), 32), Some(-40));
+        assert_eq!(working_scale_exponent(&pts(2f64.powi(40))), None);
+        assert_eq!(working_scale_exponent_within(&pts(2f64.powi(-40)), 32), Some(40));
+        // 0 bits: everything outside [1, 1] moves, and the range never exceeds 2^±64.
+        assert_eq!(working_scale_exponent_within(&pts(1.0), 0), Some(0));
+        assert_eq!(
+            working_scale_exponent_within(&pts(2f64.powi(70)), 99),
+            working_scale_exponent(&pts(2f64.powi(70)))
+        );
     }
 
     #[test]

@@ -9,7 +9,7 @@
 //! under the faces ([`on_input_points`]).
 
 use glam::DVec3;
-use reconbench_geom::cloud::scale_pow2;
+use reconbench_geom::cloud::{WORKING_SCALE_BITS, scale_pow2, working_scale_exponent_within};
 use reconbench_geom::method::{MethodError, Reconstruction};
 use reconbench_geom::{PointCloud, TriMesh};
 
@@ -46,9 +46,32 @@ pub fn reconstruct_at_working_scale(
     cloud: &PointCloud,
     f: impl FnOnce(&PointCloud) -> Result<Reconstruction, MethodError>,
 ) -> Result<Reconstruction, MethodError> {
-    let scaled = cloud.at_working_scale();
+    reconstruct_at_scale(name, cloud, WORKING_SCALE_BITS, |c, _| f(c))
+}
+
+/// [`reconstruct_at_working_scale`] for a method whose arithmetic needs the narrower
+/// range `2^±bits` (an `f32` stage) or whose parameters or diagnostics carry lengths in
+/// the cloud's units: `f` also gets the exponent `s` the cloud was multiplied by (`2^s`,
+/// 0 when it ran unscaled), to scale such lengths in ([`times_pow2`]`(x, s)`) and its
+/// length diagnostics back out (`times_pow2(x, -s)`).
+pub fn reconstruct_at_scale(
+    name: &str,
+    cloud: &PointCloud,
+    bits: i32,
+    f: impl FnOnce(&PointCloud, i32) -> Result<Reconstruction, MethodError>,
+) -> Result<Reconstruction, MethodError> {
+    let scaled = match working_scale_exponent_within(cloud.positions(), bits) {
+        Some(s) => {
+            let c = cloud
+                .clone()
+                .with_positions(scale_pow2(cloud.positions(), s))?;
+            Some((c, s))
+        }
+        None => None,
+    };
     let work = working(cloud, &scaled);
-    let mut r = f(work)?;
+    let s = scaled.as_ref().map_or(0, |(_, s)| *s);
+    let mut r = f(work, s)?;
     check_not_collapsed(name, &r.mesh, work.positions())?;
     if let Some((_, s)) = scaled {
         let normals = r.mesh.vertex_normals().map(<[DVec3]>::to_vec);
@@ -60,6 +83,12 @@ pub fn reconstruct_at_working_scale(
         };
     }
     Ok(r)
+}
+
+/// `x · 2^s`, exact while the result stays a normal double (two steps, so any `s` the
+/// working scale produces is fine).
+pub fn times_pow2(x: f64, s: i32) -> f64 {
+    scale_pow2(&[DVec3::splat(x)], s)[0].x
 }
 
 /// Fails when `mesh` has no face although `points` hold three non-collinear points: a

@@ -25,6 +25,7 @@ pub(crate) mod input;
 mod mesher;
 pub mod params;
 
+use reconbench_geom::cloud::WORKING_SCALE_BITS;
 use reconbench_geom::method::{
     Describe, Diagnostic, Diagnostics, MethodError, Needs, ParamDoc, Reconstruction, Reconstructor,
     RunCtx,
@@ -35,6 +36,7 @@ use reconbench_geom::{PointCloud, TriMesh};
 pub use params::{BallPivotingParams, PARAM_DOCS};
 
 use crate::diag::num;
+use crate::scale::times_pow2;
 use mesher::{Mesher, count_loops};
 
 /// Registry name.
@@ -74,13 +76,30 @@ impl Reconstructor for BallPivoting {
         NAME
     }
 
+    /// Runs at the exact working scale (`crate::scale`): pivoting tests only ratios of
+    /// lengths, so a cloud multiplied by a power of two gives the same faces; explicit
+    /// `radii` are moved with the cloud and the length diagnostics moved back.
     fn reconstruct(
         &self,
         cloud: &PointCloud,
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
+        self.params.validate()?;
+        crate::scale::reconstruct_at_scale(NAME, cloud, WORKING_SCALE_BITS, |cloud, s| {
+            self.pivot(cloud, s, ctx)
+        })
+    }
+}
+
+impl BallPivoting {
+    /// The algorithm on `cloud`, the input multiplied by `2^s`.
+    fn pivot(
+        &self,
+        cloud: &PointCloud,
+        s: i32,
+        ctx: &mut RunCtx,
+    ) -> Result<Reconstruction, MethodError> {
         let p = &self.params;
-        p.validate()?;
         let prep = ctx.phase("prepare", || {
             input::prepare(cloud, NAME, p.max_flipped_share)
         })?;
@@ -88,8 +107,24 @@ impl Reconstructor for BallPivoting {
         let radii: Vec<f64> = if p.radii.is_empty() {
             p.radii_spacing.iter().map(|k| k * prep.spacing).collect()
         } else {
-            p.radii.clone()
+            p.radii.iter().map(|&r| times_pow2(r, s)).collect()
         };
+        // A radius that under- or overflows next to the (moved) cloud is absurd for it.
+        if let Some(i) = radii.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+            let (name, given) = if p.radii.is_empty() {
+                ("radii_spacing", p.radii_spacing[i])
+            } else {
+                ("radii", p.radii[i])
+            };
+            return Err(MethodError::InvalidParameter {
+                name: name.into(),
+                message: format!(
+                    "{given:e} gives a ball radius of {:e} in working units (cloud multiplied \
+                     by 2^{s}), not a finite positive double",
+                    radii[i]
+                ),
+            });
+        }
         let index = ctx.phase("index", || PointIndex::new(&prep.pos))?;
         let mut m = Mesher::new(&prep.pos, &prep.nrm, &index);
         let mut per_radius = Vec::with_capacity(radii.len());
@@ -156,8 +191,11 @@ impl Reconstructor for BallPivoting {
         let unused = (0..prep.pos.len()).filter(|&i| !m.is_used(i)).count();
 
         let mut d = Diagnostics::new();
-        num(&mut d, "spacing", prep.spacing);
-        d.insert("radii".into(), Diagnostic::Series(radii.clone()));
+        num(&mut d, "spacing", times_pow2(prep.spacing, -s));
+        d.insert(
+            "radii".into(),
+            Diagnostic::Series(radii.iter().map(|&r| times_pow2(r, -s)).collect()),
+        );
         d.insert(
             "triangles_per_radius".into(),
             Diagnostic::Series(per_radius),

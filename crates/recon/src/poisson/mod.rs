@@ -38,6 +38,7 @@ pub use params::{PARAM_DOCS, PoissonParams};
 
 use crate::ball_pivoting::input;
 use crate::diag::num;
+use crate::scale::times_pow2;
 
 /// Registry name.
 pub const NAME: &str = "poisson";
@@ -76,13 +77,37 @@ impl Reconstructor for Poisson {
         NAME
     }
 
+    /// Runs at an exact power-of-two scale (`crate::scale`) that keeps the crate's `f32`
+    /// stages (input positions, marching-cubes vertices, face normals) away from
+    /// overflow and the subnormal range; the new vertices and the length diagnostics
+    /// are moved back to the cloud's units.
     fn reconstruct(
         &self,
         cloud: &PointCloud,
         ctx: &mut RunCtx,
     ) -> Result<Reconstruction, MethodError> {
+        self.params.validate()?;
+        crate::scale::reconstruct_at_scale(NAME, cloud, F32_SCALE_BITS, |cloud, s| {
+            self.solve(cloud, s, ctx)
+        })
+    }
+}
+
+/// Clouds whose largest |coordinate| lies in `[2^-32, 2^32]` run unscaled: the crate's
+/// `f32` face normals are products of two edge vectors, which for triangles down to
+/// `2^-20` of the extent stay above `f32`'s normal range (`2^-126`) there and far below
+/// its overflow. Outside, the cloud is multiplied by a power of two into `[1/2, 1)`.
+const F32_SCALE_BITS: i32 = 32;
+
+impl Poisson {
+    /// The reconstruction on `cloud`, the input multiplied by `2^s`.
+    fn solve(
+        &self,
+        cloud: &PointCloud,
+        s: i32,
+        ctx: &mut RunCtx,
+    ) -> Result<Reconstruction, MethodError> {
         let p = &self.params;
-        p.validate()?;
         let prep = ctx.phase("prepare", || {
             input::prepare(cloud, NAME, p.max_flipped_share)
         })?;
@@ -146,8 +171,8 @@ impl Reconstructor for Poisson {
             num(&mut d, "trimmed_vertices", removed as f64);
         }
         num(&mut d, INTERPOLATING_DIAGNOSTIC, 0.0);
-        num(&mut d, "cell_size", cell);
-        num(&mut d, "spacing", prep.spacing);
+        num(&mut d, "cell_size", times_pow2(cell, -s));
+        num(&mut d, "spacing", times_pow2(prep.spacing, -s));
         num(&mut d, "duplicates", prep.duplicates as f64);
         num(&mut d, "zero_normals", prep.zero_normals as f64);
         num(&mut d, "flipped_share", prep.flipped_share);
