@@ -8,6 +8,8 @@
 //!   coverage, mesh feature recovery.
 //! * [`filter_eval`]: projecting filters (MLS): distance to the input and to the surface,
 //!   normal error near and away from features, feature-line error (seed 002 Tables 3-6).
+//! * [`blend`]: blended point sets (seed 002 §7): collar uniformity, normal variation,
+//!   largest gap of the blend region, point counts.
 //! * [`topology`]: geom's topology analysis plus Delta F, `topology_ok` and
 //!   self-intersections.
 //! * [`quality`]: triangle angles, aspect ratios, edge lengths.
@@ -19,6 +21,7 @@
 //! Every report implements [`Report`]: a flat list of stable keys, serialised as a flat
 //! JSON object and convertible to a table row.
 
+pub mod blend;
 pub mod cost;
 pub mod distance;
 pub mod error;
@@ -36,6 +39,7 @@ pub mod topology;
 
 mod boxtree;
 
+pub use blend::{BlendEval, BlendOptions, eval_blend};
 pub use cost::{CostReport, cpu_time_seconds, peak_rss_bytes};
 pub use distance::{DistanceEval, DistanceOptions, FScore, Sides, eval_distance};
 pub use error::{MetricsError, Result};
