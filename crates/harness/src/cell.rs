@@ -413,8 +413,8 @@ fn without_ground_truth(
 
 /// Metrics of a projecting filter (seed 002 ch. 4, `reconbench_metrics::filter_eval`):
 /// distance of the output to the filter's input and to the surface, normal error near
-/// and away from the true features, and the error of the feature lines `mls-sharp`
-/// attaches as channels.
+/// and away from the true features, the error of the feature lines `mls-sharp`
+/// attaches as channels, and the collar metrics of a `blend` output.
 fn projection_metrics(
     output: &reconbench_geom::PointCloud,
     input: &[reconbench_geom::DVec3],
@@ -455,7 +455,7 @@ fn projection_metrics(
     let truth = shape.zip(curves.as_deref());
     // A cloud these metrics cannot measure (fewer than two distinct points) leaves them
     // out rather than failing the cell, as the filter itself succeeded.
-    match reconbench_metrics::eval_filter(
+    let mut row = match reconbench_metrics::eval_filter(
         output.positions(),
         output.normals(),
         input,
@@ -466,7 +466,14 @@ fn projection_metrics(
     ) {
         Ok(ev) => keep_metrics(ev.to_row()),
         Err(_) => BTreeMap::new(),
+    };
+    // A blended set (origin tags, seed 002 §7): its collar metrics.
+    if let Ok(Some(ev)) =
+        reconbench_metrics::eval_blend(output, Some(input.len()), &Default::default())
+    {
+        row.extend(keep_metrics(ev.to_row()));
     }
+    row
 }
 
 /// Metrics of a filter's output cloud: distances of its non-outlier points to the

@@ -5,7 +5,7 @@
 use reconbench_features::{GaussMap, GaussMapAdaptive, PcaVariation};
 use reconbench_filters::StatisticalOutliers;
 use reconbench_filters::{EbtThinning, GridThinning, RandomThinning};
-use reconbench_filters::{Mls, MlsSharp};
+use reconbench_filters::{Blend, Mls, MlsSharp};
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
 use reconbench_recon::Ebt;
 use reconbench_recon::HcIt;
@@ -28,6 +28,7 @@ pub fn entries() -> Vec<MethodEntry> {
         filter::<StatisticalOutliers>(),
         filter::<Mls>(),
         filter::<MlsSharp>(),
+        filter::<Blend>(),
         filter::<EbtThinning>(),
         filter::<RandomThinning>(),
         filter::<GridThinning>(),
