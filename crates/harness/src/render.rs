@@ -365,6 +365,11 @@ impl Scale {
         (0..=n).map(|i| i as f64 * self.step).collect()
     }
 
+    /// A distance written with as many decimals as the scale's step needs.
+    pub fn label(&self, v: f64) -> String {
+        fmt_tick(v, self.step)
+    }
+
     /// The (unshaded) colour of a distance.
     pub fn colour(&self, d: f64) -> [u8; 3] {
         if d.is_nan() {
@@ -504,13 +509,15 @@ struct Frame {
 }
 
 impl Frame {
-    /// The bounding box of the vertices the faces of `meshes` use.
+    /// Centred on the bounding box of the vertices the faces of `meshes` use, with the
+    /// radius of the smallest ball around that centre holding them all (so that no
+    /// rotation leaves the view, and a round shape fills it).
     fn of(meshes: &[&RenderData]) -> Option<Self> {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for m in meshes {
             for f in &m.faces {
-                for &i in f {
+                for &i in f.iter().filter(|&&i| (i as usize) < m.vertices.len()) {
                     let v = pos(m, i as usize);
                     if v.is_finite() {
                         lo = lo.min(v);
@@ -519,9 +526,24 @@ impl Frame {
                 }
             }
         }
-        (lo.is_finite() && hi.is_finite()).then(|| Self {
-            centre: (lo + hi) * 0.5,
-            radius: ((hi - lo).length() * 0.5).max(1e-12),
+        if !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let centre = (lo + hi) * 0.5;
+        let mut r2: f64 = 0.0;
+        for m in meshes {
+            for f in &m.faces {
+                for &i in f.iter().filter(|&&i| (i as usize) < m.vertices.len()) {
+                    let v = pos(m, i as usize);
+                    if v.is_finite() {
+                        r2 = r2.max(v.distance_squared(centre));
+                    }
+                }
+            }
+        }
+        Some(Self {
+            centre,
+            radius: r2.sqrt().max(1e-12),
         })
     }
 }

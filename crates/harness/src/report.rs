@@ -658,7 +658,7 @@ fn write_renders(
     let _ = writeln!(
         md,
         "Seed index {seed}, one image per configuration, one column per method, each seen from the front, the side and the top. Colour: distance of the mesh to the true surface (fraction of the bounding-box diagonal), one scale for the whole report, 0 to {} ({how}). Red lines: boundary edges (holes, open rims); magenta: faces that intersect another face or sit on an edge of three or more faces. Each heading gives the method's Hausdorff distance and its numbers of boundary edges, self-intersecting face pairs and non-manifold edges.\n",
-        fmt_num(scale.max)
+        scale.label(scale.max)
     );
     let mut groups: Vec<((&str, &str), Vec<&Row>)> = Vec::new();
     for r in &shown {
@@ -767,6 +767,36 @@ fn list_files(dir: &Path) -> Vec<PathBuf> {
 }
 
 /// The plots of one method kind: `(file stem, caption, plot)`.
+/// The metrics to plot on dataset `d`: `metrics`, except that on a shape without true
+/// features (no ground-truth feature point in any of its rows) precision, recall and F1
+/// are 0 for every detector that labelled anything and undefined for the others, so their
+/// lines lie on top of each other at 0; the false positives are plotted instead.
+fn featureless_metrics(gs: &[&Group], d: &str, metrics: &[String]) -> Vec<String> {
+    let rows: Vec<&&Group> = gs.iter().filter(|g| g.labels.dataset == d).collect();
+    let featureless = !rows.is_empty()
+        && rows.iter().all(|g| {
+            g.metrics
+                .get("feature_gt_positives")
+                .is_some_and(|s| s.mean == 0.0)
+        });
+    let mut out: Vec<String> = Vec::new();
+    for m in metrics {
+        let m = if featureless
+            && ["feature_precision", "feature_recall", "feature_f1"]
+                .iter()
+                .any(|p| m.starts_with(p))
+        {
+            "feature_false_positives".to_string()
+        } else {
+            m.clone()
+        };
+        if !out.contains(&m) {
+            out.push(m);
+        }
+    }
+    out
+}
+
 fn kind_plots(
     kind: MethodKind,
     groups: &[Group],
@@ -799,10 +829,10 @@ fn kind_plots(
     };
     if let Some(x) = &x {
         for d in &datasets {
-            for m in &metrics {
-                if let Some(plot) = metric_plot(&gs, d, m, x, swept) {
+            for m in featureless_metrics(&gs, d, &metrics) {
+                if let Some(plot) = metric_plot(&gs, d, &m, x, swept) {
                     out.push((
-                        format!("{}_{}_vs_{}_{}", kind.as_str(), slug(m), slug(x), slug(d)),
+                        format!("{}_{}_vs_{}_{}", kind.as_str(), slug(&m), slug(x), slug(d)),
                         format!("{m} vs {x} on {d} (mean, band = ± std over seeds)"),
                         Plot::Lines(plot),
                     ));

@@ -304,3 +304,97 @@ fn render_data_survives_a_file_round_trip() {
         "{e}"
     );
 }
+
+/// Rows of a small experiment (two reconstruction methods, two noise levels, two seeds)
+/// marked ok, with the render path `render` gives each cell at seed 0.
+fn report_rows(
+    render: impl Fn(&reconbench_harness::experiment::Cell) -> Option<String>,
+) -> (
+    reconbench_harness::experiment::Experiment,
+    Vec<reconbench_harness::store::Row>,
+) {
+    use reconbench_harness::store::{Row, Status};
+    let exp = reconbench_harness::experiment::Experiment::parse(
+        r#"
+        seeds = 2
+        [[datasets]]
+        shape = "sphere"
+        points = 200
+        [[perturbations]]
+        noise = [0.0, 0.01]
+        [[methods]]
+        name = "reference-mesh"
+        params = { resolution = [8, 16] }
+        [report]
+        plots = false
+        tables = []
+        render_size = 64
+        "#,
+        "renders",
+    )
+    .unwrap();
+    let rows = exp
+        .cells
+        .iter()
+        .map(|c| {
+            let mut r = Row::failed(c, Status::Ok, "");
+            r.error = None;
+            r.metrics.insert("hausdorff".into(), 0.01);
+            if c.spec.seed_index == 0 {
+                r.render = render(c);
+            }
+            r
+        })
+        .collect();
+    (exp, rows)
+}
+
+#[test]
+fn the_report_draws_one_image_per_configuration_from_the_stored_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let open = constant(&open_cup(), 0.002);
+    let (exp, rows) = report_rows(|c| {
+        let rel = reconbench_harness::render::data_path(&c.key);
+        open.save(&dir.path().join(&rel)).unwrap();
+        Some(rel)
+    });
+    let out =
+        reconbench_harness::report::write_report(dir.path(), &rows, Some(&exp), None).unwrap();
+    // Two noise levels: two images, each with the two resolutions side by side.
+    assert_eq!(out.renders.len(), 2, "{:?}", out.renders);
+    for p in &out.renders {
+        assert!(p.extension().is_some_and(|e| e == "png"), "{}", p.display());
+        assert!(p.exists());
+    }
+    let md = std::fs::read_to_string(&out.report).unwrap();
+    assert!(
+        md.contains("## Renders") && md.contains("95th percentile"),
+        "{md}"
+    );
+    assert!(!md.contains("Left out"), "{md}");
+}
+
+#[test]
+fn old_or_missing_render_files_give_a_note_not_a_failure() {
+    let dir = tempfile::tempdir().unwrap();
+    // An older version's rows: a PNG per cell, no render data.
+    let (exp, rows) = report_rows(|c| Some(format!("renders/{}.png", c.key)));
+    let out =
+        reconbench_harness::report::write_report(dir.path(), &rows, Some(&exp), None).unwrap();
+    assert!(out.renders.is_empty());
+    let md = std::fs::read_to_string(&out.report).unwrap();
+    assert!(md.contains("older version"), "{md}");
+    // Data files named but gone, or not render data: a note naming them.
+    let (exp, rows) = report_rows(|c| Some(reconbench_harness::render::data_path(&c.key)));
+    let first = rows[0].render.clone().unwrap();
+    std::fs::create_dir_all(dir.path().join("renders")).unwrap();
+    std::fs::write(dir.path().join(&first), b"garbage").unwrap();
+    let out =
+        reconbench_harness::report::write_report(dir.path(), &rows, Some(&exp), None).unwrap();
+    assert!(out.renders.is_empty());
+    let md = std::fs::read_to_string(&out.report).unwrap();
+    assert!(
+        md.contains("No render data") && md.contains("not a render data file"),
+        "{md}"
+    );
+}
