@@ -113,13 +113,14 @@ fn same_seed_same_rows_and_every_output_is_written() {
         .flatten()
         .map(|e| e.path())
         .collect();
-    let ext = |e: &str| {
+    let ext = |e: &str| -> Vec<&std::path::PathBuf> {
         renders
             .iter()
             .filter(|p| p.extension().is_some_and(|x| x == e))
+            .collect()
     };
-    assert_eq!(ext("rbr").count(), 8, "2 sizes x 2 noise x 2 resolutions");
-    let images: Vec<_> = ext("png").collect();
+    assert_eq!(ext("rbr").len(), 8, "2 sizes x 2 noise x 2 resolutions");
+    let images = ext("png");
     assert_eq!(images.len(), 4, "2 sizes x 2 noise");
     let (w, h) = png_size(images[0]);
     assert!(w > 2 * 64 && h > 3 * 64, "{w} x {h}");

@@ -479,25 +479,26 @@ pub fn viridis(t: f64) -> [f64; 3] {
     ]
 }
 
+/// The rows of the view rotation of a camera seen from azimuth `az_deg` (about the z
+/// axis, 0 = from -y) and elevation `el_deg` (above the xy plane), with z up on the
+/// screen: screen right, screen up, and the direction towards the camera (view depth:
+/// larger is nearer).
 fn rotation(az_deg: f64, el_deg: f64) -> [DVec3; 3] {
     let (sa, ca) = az_deg.to_radians().sin_cos();
     let (se, ce) = el_deg.to_radians().sin_cos();
-    // Rows of Rx(el) * Ry(az).
-    let ry = [DVec3::new(ca, 0.0, sa), DVec3::Y, DVec3::new(-sa, 0.0, ca)];
-    let rx = [DVec3::X, DVec3::new(0.0, ce, -se), DVec3::new(0.0, se, ce)];
-    let col = |j: usize| DVec3::new(ry[0][j], ry[1][j], ry[2][j]);
-    [
-        DVec3::new(rx[0].dot(col(0)), rx[0].dot(col(1)), rx[0].dot(col(2))),
-        DVec3::new(rx[1].dot(col(0)), rx[1].dot(col(1)), rx[1].dot(col(2))),
-        DVec3::new(rx[2].dot(col(0)), rx[2].dot(col(1)), rx[2].dot(col(2))),
-    ]
+    let towards = DVec3::new(sa * ce, -ca * ce, se);
+    let right = DVec3::new(ca, sa, 0.0);
+    let up = towards.cross(right);
+    [right, up, towards]
 }
 
-/// The three viewpoints `(name, azimuth, elevation)` in degrees.
+/// The three viewpoints `(name, azimuth, elevation)` in degrees, z up (the axis of the
+/// synthetic surfaces of revolution): from the front (-y) and a little to the right and
+/// above, from the side (+x), and from above.
 pub const VIEWS: [(&str, f64, f64); 3] = [
-    ("front", 20.0, 20.0),
-    ("side", 110.0, 20.0),
-    ("top", 20.0, 80.0),
+    ("front", 25.0, 20.0),
+    ("side", 105.0, 20.0),
+    ("top", 25.0, 80.0),
 ];
 
 /// What every panel of one image is framed by: a centre and a radius, shared so that

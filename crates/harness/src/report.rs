@@ -657,7 +657,7 @@ fn write_renders(
     };
     let _ = writeln!(
         md,
-        "Seed index {seed}, one image per configuration, one column per method, each seen from the front, the side and the top. Colour: distance of the mesh to the true surface (fraction of the bounding-box diagonal), one scale for the whole report, 0 to {} ({how}). Red lines: boundary edges (holes, open rims); magenta: faces that intersect another face or sit on an edge of three or more faces. Each heading gives the method's Hausdorff distance and its numbers of boundary edges, self-intersecting face pairs and non-manifold edges.\n",
+        "Seed index {seed}, one image per configuration, one column per method, each seen from the front, the side and the top (z up). Colour: distance of the mesh to the true surface (fraction of the bounding-box diagonal), one scale for the whole report, 0 to {} ({how}). Red lines: boundary edges (holes, open rims); magenta: faces that intersect another face or sit on an edge of three or more faces. Each heading gives the method's Hausdorff distance and its numbers of boundary edges, self-intersecting face pairs and non-manifold edges.\n",
         scale.label(scale.max)
     );
     let mut groups: Vec<((&str, &str), Vec<&Row>)> = Vec::new();
