@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::mesher::{Mesher, tri_normal};
+use super::mesher::{ACCEPTED, Mesher, tri_normal};
 
 impl Mesher<'_> {
     /// Closes the small loops; returns the number of loops closed.
@@ -44,10 +44,12 @@ impl Mesher<'_> {
         if l.len() == 3 && l.iter().all(|&v| self.adj.degree(v) == 2) {
             return false;
         }
+        let mut ears: Vec<(f64, usize)> = Vec::new();
         while l.len() > 3 {
             let k = l.len();
-            // Best ear: largest smallest angle, diagonal not yet an edge.
-            let mut best: Option<(f64, usize)> = None;
+            // Best ear: largest smallest angle, diagonal not yet an edge, and (with
+            // IMPL-CHOICE I14) no crossing of a mesh face.
+            ears.clear();
             for i in 0..k {
                 let (z, a, b) = (l[(i + k - 1) % k], l[i], l[(i + 1) % k]);
                 if self.adj.has(z, b) {
@@ -58,11 +60,15 @@ impl Mesher<'_> {
                     self.pts[a as usize],
                     self.pts[b as usize],
                 );
-                if q.is_finite() && best.is_none_or(|(bq, _)| q < bq) {
-                    best = Some((q, i));
+                if q.is_finite() {
+                    ears.push((q, i));
                 }
             }
-            let Some((_, i)) = best else {
+            ears.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            let Some(&(_, i)) = ears
+                .iter()
+                .find(|&&(_, i)| !self.crosses_mesh([l[(i + k - 1) % k], l[i], l[(i + 1) % k]]))
+            else {
                 return false;
             };
             let (z, a, b) = (l[(i + k - 1) % k], l[i], l[(i + 1) % k]);
@@ -80,6 +86,32 @@ impl Mesher<'_> {
         debug_assert_eq!(self.e_b[e as usize], b);
         self.fill(e, l[2]);
         true
+    }
+}
+
+impl Mesher<'_> {
+    /// With IMPL-CHOICE I14 on: whether triangle `tri` (a hole's ear, a restart's seed)
+    /// would intersect a mesh face sharing none of its vertices, among the faces on the
+    /// meshed points within R of the triangle's corners' bounding sphere.
+    pub(crate) fn crosses_mesh(&mut self, tri: [u32; 3]) -> bool {
+        if !self.cfg.self_check {
+            return false;
+        }
+        let p = tri.map(|i| self.pts[i as usize]);
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        let rad = p.iter().map(|&x| x.distance(c)).fold(0.0, f64::max) + self.cfg.r;
+        let mut near = std::mem::take(&mut self.done_near);
+        near.clear();
+        let (pts, state) = (self.pts, &self.state);
+        self.grid.for_cells(c, rad, |range| {
+            for i in range {
+                if state[i] == ACCEPTED && pts[i].distance_squared(c) <= rad * rad {
+                    near.push(i as u32);
+                }
+            }
+        });
+        self.done_near = near;
+        self.hits_mesh(tri)
     }
 }
 

@@ -50,6 +50,9 @@ pub(crate) struct Cfg {
     pub free_inside_rel: f64,
     /// IMPL-CHOICE I13: interior mesh vertices inside (a, t, b) block it.
     pub interior_inside: bool,
+    /// IMPL-CHOICE I14: a triangle that intersects a mesh face sharing none of its
+    /// vertices is refused.
+    pub self_check: bool,
     /// IMPL-CHOICE I6: reject triangles that contain a front vertex in 2-D.
     pub front_inside_check: bool,
     pub fill_any_angle: bool,
@@ -93,6 +96,8 @@ pub(crate) struct Stats {
     pub sector_rejects: u64,
     /// Candidates refused by IMPL-CHOICE I13 (an interior mesh vertex inside).
     pub interior_rejects: u64,
+    /// Candidates refused by IMPL-CHOICE I14 (they would cross a mesh face).
+    pub self_rejects: u64,
     pub holes_closed: u64,
 }
 
@@ -112,6 +117,7 @@ impl Stats {
         self.fail_rules += o.fail_rules;
         self.sector_rejects += o.sector_rejects;
         self.interior_rejects += o.interior_rejects;
+        self.self_rejects += o.self_rejects;
         self.holes_closed += o.holes_closed;
     }
 }
@@ -161,6 +167,20 @@ pub(crate) struct Mesher<'g> {
     /// Interior mesh vertices within R of the popped edge's midpoint (scratch of
     /// IMPL-CHOICE I13).
     pub mesh_near: Vec<u32>,
+    /// Meshed points (front or interior) within R of the popped edge's midpoint
+    /// (scratch of IMPL-CHOICE I14).
+    pub done_near: Vec<u32>,
+    /// Per point: the corner `3 f + k` of the last triangle `f` added on it, `NONE` if
+    /// none (IMPL-CHOICE I14).
+    pub vf_head: Vec<u32>,
+    /// Per triangle corner: the previous corner on the same point, `NONE` at the end.
+    pub vf_next: Vec<u32>,
+    /// Per point: its longest incident mesh edge, the reach of its triangles.
+    pub v_reach: Vec<f64>,
+    /// Per triangle: the check that last visited it (IMPL-CHOICE I14 deduplication).
+    pub f_seen: Vec<u32>,
+    /// The current check's number for `f_seen`.
+    pub seen_stamp: u32,
     /// Pending candidates `(key, point)` of the lazy evaluation (scratch; key: squared
     /// distance to the edge midpoint, or minus the score bound for the segment distance).
     pub pend: Vec<(f64, u32)>,
@@ -200,6 +220,7 @@ impl<'g> Mesher<'g> {
     /// A fresh state: every point Free except those in `refused`.
     pub fn new(pts: &'g [DVec3], grid: &'g Grid, cfg: Cfg, refused: &[bool]) -> Self {
         let n = pts.len();
+        let self_check = cfg.self_check;
         let state = (0..n)
             .map(|i| if refused[i] { REFUSED } else { FREE })
             .collect();
@@ -230,6 +251,16 @@ impl<'g> Mesher<'g> {
             cand: Vec::new(),
             free_near: Vec::new(),
             mesh_near: Vec::new(),
+            done_near: Vec::new(),
+            vf_head: if self_check {
+                vec![NONE; n]
+            } else {
+                Vec::new()
+            },
+            vf_next: Vec::new(),
+            v_reach: if self_check { vec![0.0; n] } else { Vec::new() },
+            f_seen: Vec::new(),
+            seen_stamp: 0,
             pend: Vec::new(),
             xs: Vec::new(),
             chunks: Vec::new(),
@@ -250,6 +281,19 @@ impl<'g> Mesher<'g> {
         let n = tri_normal(p[0], p[1], p[2]);
         for &v in &t {
             self.vn[v as usize] += n;
+        }
+        if self.cfg.self_check {
+            let f = self.tris.len() as u32;
+            for (k, &v) in t.iter().enumerate() {
+                let v = v as usize;
+                self.vf_next.push(self.vf_head[v]);
+                self.vf_head[v] = 3 * f + k as u32;
+                let far = p[(k + 1) % 3]
+                    .distance(p[k])
+                    .max(p[(k + 2) % 3].distance(p[k]));
+                self.v_reach[v] = self.v_reach[v].max(far);
+            }
+            self.f_seen.push(0);
         }
         self.tris.push(t);
     }

@@ -331,6 +331,7 @@ fn mesher_cfg(p: &PriorityFrontParams, r0: f64, rho: f64) -> Cfg {
         free_inside_h: p.free_inside_height * rho,
         free_inside_rel: p.free_inside_rel,
         interior_inside: p.interior_inside_check,
+        self_check: p.self_intersection_check,
         front_inside_check: p.front_inside_check,
         fill_any_angle: p.fill_any_angle,
         sector_check: p.sector_check,
@@ -479,6 +480,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
     num(diag, "fail_rules", s.fail_rules as f64);
     num(diag, "sector_rejects", s.sector_rejects as f64);
     num(diag, "interior_rejects", s.interior_rejects as f64);
+    num(diag, "self_rejects", s.self_rejects as f64);
     num(diag, "boundary_loops", grown.loops.len() as f64);
     num(diag, "holes_closed", s.holes_closed as f64);
     diag.insert(
@@ -497,7 +499,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -523,6 +525,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.free_inside_height,
         p.free_inside_rel,
         p.interior_inside_check,
+        p.self_intersection_check,
         p.front_inside_check,
         p.close_holes_max,
         p.stitch_zip,

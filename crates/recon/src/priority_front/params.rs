@@ -99,6 +99,12 @@ pub struct PriorityFrontParams {
     /// but leaves a hole on the blue-noise fandisk-like shape (li_variety), see
     /// docs/methods/priority_front.md, "Real data". false = the paper.
     pub interior_inside_check: bool,
+    /// Reject a candidate triangle (and a glue's repair triangle) that intersects a mesh
+    /// triangle sharing none of its vertices (IMPL-CHOICE I14, not in the paper; exact
+    /// predicates, the self-intersection metric's test): the 2-D crossing and inside
+    /// tests see one projection plane, so a front that reaches another sheet across a
+    /// thin part or a notch can cut through the mesh there. false = the paper.
+    pub self_intersection_check: bool,
     /// Reject a candidate when a front vertex near the edge projects strictly inside the
     /// 2-D triangle (a, t, b) (IMPL-CHOICE I6, not in the paper; default true): the
     /// triangle would fold over the front, which the edge-crossing test misses when a
@@ -213,6 +219,7 @@ impl Default for PriorityFrontParams {
             free_inside_height: 0.5,
             free_inside_rel: 0.25,
             interior_inside_check: false,
+            self_intersection_check: false,
             front_inside_check: true,
             fill_any_angle: true,
             sector_check: true,
@@ -443,6 +450,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "free_inside_height",
         Unit::Spacing,
         "I12: with reject_free_inside, only Free points this close to the triangle's plane block it, in rho (0.5; 1000 = all)",
+    ),
+    ParamDoc::new(
+        "self_intersection_check",
+        Unit::Flag,
+        "I14: reject t when (a,t,b) would intersect a mesh triangle sharing no vertex with it (false; issue 20)",
     ),
     ParamDoc::new(
         "interior_inside_check",

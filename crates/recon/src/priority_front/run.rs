@@ -169,7 +169,9 @@ impl Mesher<'_> {
             };
             let old_r = self.cfg.r;
             self.cfg.r = r;
-            match self.find_seed(&centres, &sc) {
+            // IMPL-CHOICE I14: a restart seed through the mesh counts as not found.
+            let found = self.find_seed(&centres, &sc);
+            match found.filter(|&s| !self.crosses_mesh(s)) {
                 Some(s) => {
                     failures = 0;
                     self.add_seed(s);

@@ -7,6 +7,8 @@ use super::cross::{
     XNear, crosses, crosses_projected, front_inside_projected, inside_2d, plane_basis, project_near,
 };
 use super::density::knn;
+use reconbench_geom::spatial::tri_tri_intersect;
+
 use super::grid::NONE;
 use super::mesher::{ACCEPTED, Cand, FREE, Mesher, REFUSED};
 
@@ -105,9 +107,15 @@ impl Mesher<'_> {
         // `free_near` serves only the optional Free-inside test.
         let keep_free = self.cfg.reject_free_inside;
         let keep_mesh = self.cfg.interior_inside;
+        let keep_done = self.cfg.self_check;
+        let mut done_near = std::mem::take(&mut self.done_near);
+        done_near.clear();
         let fin = &self.fin;
         self.grid.for_cells(o, r, |range| {
             for i in range {
+                if keep_done && state[i] == ACCEPTED && (pts[i] - o).length_squared() <= r2 {
+                    done_near.push(i as u32);
+                }
                 if state[i] == FREE {
                     let d2 = (pts[i] - o).length_squared();
                     if d2 <= r2 {
@@ -169,6 +177,7 @@ impl Mesher<'_> {
         }
         self.free_near = free_near;
         self.mesh_near = mesh_near;
+        self.done_near = done_near;
         self.pend = pend;
         self.xs = xs;
         self.chunks = chunks;
@@ -592,6 +601,13 @@ impl Mesher<'_> {
             self.stats.interior_rejects += 1;
             return None;
         }
+        // IMPL-CHOICE I14 (issue 20, `self_intersection_check`): no triangle through a
+        // mesh face it shares no vertex with; the 2-D tests above see one plane only.
+        // A FILL is exempt: a 3-edge hole has one possible triangle.
+        if self.cfg.self_check && !is_fill && self.hits_mesh([a, t, b]) {
+            self.stats.self_rejects += 1;
+            return None;
+        }
         if self.state[t as usize] == FREE {
             return Some(Op::Join(t, c.n_new));
         }
@@ -613,7 +629,9 @@ impl Mesher<'_> {
                 // mirror (a, y, p), else reject p.
                 let g = self.fin[t as usize];
                 let q = self.e_a[g as usize];
-                if let Some(n2) = self.repair_ok([t, q, b], self.e_nrm[g as usize], (q, b)) {
+                if let Some(n2) = self.repair_ok([t, q, b], self.e_nrm[g as usize], (q, b))
+                    && !(self.cfg.self_check && self.hits_mesh([t, q, b]))
+                {
                     // IMPL-CHOICE I4 for the repair: q->b leaves q inside q's free sector
                     // and b inside b's (b's edges being p->b, b->c after the first
                     // triangle).
@@ -629,7 +647,9 @@ impl Mesher<'_> {
                 if self.cfg.glue_mirror {
                     let h = self.fout[t as usize];
                     let y = self.e_b[h as usize];
-                    if let Some(n2) = self.repair_ok([a, y, t], self.e_nrm[h as usize], (a, y)) {
+                    if let Some(n2) = self.repair_ok([a, y, t], self.e_nrm[h as usize], (a, y))
+                        && !(self.cfg.self_check && self.hits_mesh([a, y, t]))
+                    {
                         let z = self.e_a[self.fin[a as usize] as usize];
                         let sy = self.e_b[self.fout[y as usize] as usize];
                         let np = plane_normal(self.e_nrm[h as usize], n2);
@@ -683,6 +703,57 @@ impl Mesher<'_> {
                 && inside_2d(q2, [q.dot(u), q.dot(v)])
                 && (self.pts[f as usize] - pa).dot(n_new).abs() <= hmax
         })
+    }
+
+    /// True when triangle `tri` intersects a mesh triangle that shares none of its
+    /// vertices, among the triangles on the meshed points near the popped edge
+    /// (`done_near`, within R of its midpoint) that can reach `tri`: a point's triangles
+    /// lie within its longest incident edge of it (IMPL-CHOICE I14). Exact predicates,
+    /// as the self-intersection metric. A triangle none of whose corners is within R of
+    /// the edge's midpoint is not seen (it would need edges longer than about R).
+    pub(crate) fn hits_mesh(&mut self, tri: [u32; 3]) -> bool {
+        self.seen_stamp = self.seen_stamp.wrapping_add(1);
+        if self.seen_stamp == 0 {
+            self.f_seen.iter_mut().for_each(|s| *s = 0);
+            self.seen_stamp = 1;
+        }
+        let p = tri.map(|i| self.pts[i as usize]);
+        let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        let rt = p.iter().map(|&x| x.distance(c)).fold(0.0, f64::max);
+        let sep = Separation::new(p, c, rt);
+        let done = std::mem::take(&mut self.done_near);
+        let hit = done.iter().any(|&v| {
+            let reach = rt + self.v_reach[v as usize];
+            if self.pts[v as usize].distance_squared(c) > reach * reach {
+                return false;
+            }
+            let mut k = self.vf_head[v as usize];
+            while k != NONE {
+                let fi = k as usize / 3;
+                k = self.vf_next[k as usize];
+                if self.f_seen[fi] == self.seen_stamp {
+                    continue;
+                }
+                self.f_seen[fi] = self.seen_stamp;
+                let g = self.tris[fi];
+                if g.iter().any(|x| tri.contains(x)) {
+                    continue;
+                }
+                let q = g.map(|i| self.pts[i as usize]);
+                let (glo, ghi) = (q[0].min(q[1]).min(q[2]), q[0].max(q[1]).max(q[2]));
+                if glo.cmple(hi).all()
+                    && lo.cmple(ghi).all()
+                    && !sep.apart(q)
+                    && tri_tri_intersect(&p, &q)
+                {
+                    return true;
+                }
+            }
+            false
+        });
+        self.done_near = done;
+        hit
     }
 
     /// True when direction `x -> dir` lies strictly inside the free sector of `x` whose
@@ -842,6 +913,59 @@ pub(crate) fn plane_normal(n1: DVec3, n2: DVec3) -> DVec3 {
     } else {
         n1
     }
+}
+
+/// A fast, conservative disjointness test against one triangle: the projections on
+/// the triangle's plane are separated along an edge normal of either by more than a
+/// margin far above rounding (disjoint projections mean disjoint triangles). Spares
+/// the exact test for the nearly coplanar neighbours of IMPL-CHOICE I14.
+struct Separation {
+    o: DVec3,
+    u: DVec3,
+    v: DVec3,
+    p2: [[f64; 2]; 3],
+    eps: f64,
+}
+
+impl Separation {
+    fn new(p: [DVec3; 3], c: DVec3, rt: f64) -> Self {
+        let (u, v) = plane_basis((p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero());
+        let pr = |x: DVec3| [(x - c).dot(u), (x - c).dot(v)];
+        Self {
+            o: c,
+            u,
+            v,
+            p2: p.map(pr),
+            eps: 1e-9 * rt,
+        }
+    }
+
+    /// True when `q` certainly does not meet the triangle.
+    fn apart(&self, q: [DVec3; 3]) -> bool {
+        let q2 = q.map(|x| [(x - self.o).dot(self.u), (x - self.o).dot(self.v)]);
+        separated(&self.p2, &q2, self.eps) || separated(&q2, &self.p2, self.eps)
+    }
+}
+
+/// Whether an edge line of 2-D triangle `a` has all of `b` beyond it, farther than
+/// `eps` from it on the side away from `a`'s third corner.
+fn separated(a: &[[f64; 2]; 3], b: &[[f64; 2]; 3], eps: f64) -> bool {
+    (0..3).any(|k| {
+        let (p, q) = (a[k], a[(k + 1) % 3]);
+        let n = [q[1] - p[1], p[0] - q[0]];
+        let len = (n[0] * n[0] + n[1] * n[1]).sqrt();
+        if len == 0.0 {
+            return false;
+        }
+        let d = |x: [f64; 2]| ((x[0] - p[0]) * n[0] + (x[1] - p[1]) * n[1]) / len;
+        let side = d(a[(k + 2) % 3]);
+        let bs = b.map(d);
+        if side >= 0.0 {
+            bs.iter().all(|&x| x < -eps)
+        } else {
+            bs.iter().all(|&x| x > eps)
+        }
+    })
 }
 
 #[cfg(test)]
