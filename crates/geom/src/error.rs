@@ -112,6 +112,24 @@ pub enum GeomError {
     },
 }
 
+impl GeomError {
+    /// True for errors about what the caller handed in: unusable input
+    /// ([`GeomError::InvalidInput`]: too few points, a degenerate cloud), a bad parameter,
+    /// a malformed or unsupported file. Non-finite values, length mismatches, face
+    /// indices out of range and rank-deficient systems are not: inside a method they
+    /// mean the method built something wrong; the readers report bad files as
+    /// [`GeomError::Format`].
+    pub fn is_input(&self) -> bool {
+        matches!(
+            self,
+            Self::InvalidInput(_)
+                | Self::InvalidParameter { .. }
+                | Self::Format { .. }
+                | Self::UnsupportedFormat { .. }
+        )
+    }
+}
+
 /// Text for an error message with every character that could corrupt a terminal or a
 /// one-line log rendered visibly: ASCII control bytes (NUL, ESC, line breaks, tabs, DEL)
 /// as `\x00`, `\x1b`, ...; other Unicode control and invisible formatting characters
@@ -211,6 +229,31 @@ mod tests {
         ));
         let once = escape_control("\0\u{1b}").into_owned();
         assert_eq!(escape_control(&once), once, "escaping is idempotent");
+    }
+
+    #[test]
+    fn input_errors_are_told_apart_from_internal_ones() {
+        use crate::method::MethodError;
+        let fmt = GeomError::Format {
+            path: PathBuf::from("a.ply"),
+            location: Location::File,
+            message: "x".into(),
+        };
+        assert!(fmt.is_input());
+        assert!(GeomError::InvalidInput("too few points".into()).is_input());
+        let inner = GeomError::NonFinite {
+            what: "vertex",
+            index: 0,
+            value: [f64::NAN; 3],
+        };
+        assert!(
+            !inner.is_input(),
+            "a NaN a method produced is its own failure"
+        );
+        assert!(MethodError::InvalidInput("coplanar".into()).is_input());
+        assert!(MethodError::from(GeomError::InvalidInput("k".into())).is_input());
+        assert!(!MethodError::from(inner).is_input());
+        assert!(!MethodError::Failed("solver".into()).is_input());
     }
 
     #[test]

@@ -79,12 +79,21 @@ pub fn run(
     let mut ctx = RunCtx::new(seed);
     let mut summary = BTreeMap::new();
     let t0 = Instant::now();
-    // What the input or a parameter cannot give is bad input (exit code 2 on the CLI).
-    let method_err = |e: MethodError| match e {
-        MethodError::InvalidInput(_) | MethodError::InvalidParameter { .. } => {
-            HarnessError::input(format!("{name}: {e}"))
+    // What the input or a parameter cannot give is bad input (exit code 2 on the CLI);
+    // the message names the file the method ran on.
+    let shown = reconbench_geom::error::escape_control(&input.to_string_lossy()).into_owned();
+    let method_err = |e: MethodError| {
+        let text = e.to_string();
+        let msg = if text.contains(name) {
+            format!("{shown}: {text}")
+        } else {
+            format!("{shown}: {name}: {text}")
+        };
+        if e.is_input() {
+            HarnessError::input(msg)
+        } else {
+            HarnessError::failure(msg)
         }
-        _ => HarnessError::failure(format!("{name}: {e}")),
     };
     let diagnostics = match built {
         Built::Reconstruct(m) => {

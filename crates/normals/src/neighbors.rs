@@ -112,8 +112,22 @@ pub fn check_k(name: &str, k: usize, min: usize) -> Result<(), MethodError> {
             message: format!("must be at least {min}, got {k}"),
         });
     }
+    if k > MAX_K {
+        return Err(MethodError::InvalidParameter {
+            name: name.to_string(),
+            message: format!(
+                "{k} neighbours per point: at most {MAX_K} (a kNN table of 1,000,000 points \
+                 with k = {k} needs about {:.0} GB)",
+                1e6 * k as f64 * 12.0 / 1e9
+            ),
+        });
+    }
     Ok(())
 }
+
+/// Largest neighbourhood size an estimator accepts: far above any useful `k` (a few
+/// hundred), and small enough that the kNN table of a large cloud fits in memory.
+pub const MAX_K: usize = 100_000;
 
 /// Orients (when `orient_k > 0`) and packages the normals with diagnostics; fails when
 /// every normal is zero-length on points that are not collinear.
@@ -126,7 +140,8 @@ pub fn finish(
     let mut diagnostics = reconbench_geom::method::Diagnostics::new();
     let degenerate = normals.iter().filter(|n| **n == DVec3::ZERO).count();
     if degenerate == normals.len() && !reconbench_geom::cloud::all_collinear(points) {
-        return Err(MethodError::Failed(format!(
+        // An input error (exit code 2): the estimator cannot handle this cloud.
+        return Err(MethodError::InvalidInput(format!(
             "every one of the {} normals is zero-length although the points are not \
              collinear",
             normals.len()

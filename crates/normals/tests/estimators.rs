@@ -306,3 +306,15 @@ fn fused_pf_fit_equals_the_row_fit_bit_for_bit() {
         assert_eq!(mismatches, 0, "k = {k}");
     }
 }
+
+/// A neighbourhood size no machine could hold a kNN table for is refused by name when
+/// the parameters are checked (issue 28: `k = 1e12` passed `run --dry-run`).
+#[test]
+fn an_absurd_k_is_refused_with_the_limit() {
+    use reconbench_normals::neighbors::{MAX_K, check_k};
+    assert!(check_k("k", 16, 3).is_ok());
+    assert!(check_k("k", MAX_K, 3).is_ok());
+    let e = check_k("k", 1_000_000_000_000, 3).unwrap_err().to_string();
+    assert!(e.contains("'k'") && e.contains("at most 100000"), "{e}");
+    assert!(check_k("k", 2, 3).is_err());
+}

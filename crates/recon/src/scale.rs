@@ -92,7 +92,8 @@ pub fn times_pow2(x: f64, s: i32) -> f64 {
 }
 
 /// Fails when `mesh` has no face although `points` hold three non-collinear points: a
-/// reconstruction that collapsed to nothing is an error, not an empty success.
+/// reconstruction that collapsed to nothing is an error, not an empty success, and an
+/// input error ([`MethodError::InvalidInput`]: the method cannot handle this cloud).
 pub fn check_not_collapsed(
     name: &str,
     mesh: &TriMesh,
@@ -101,7 +102,8 @@ pub fn check_not_collapsed(
     if mesh.n_faces() > 0 || reconbench_geom::cloud::all_collinear(points) {
         return Ok(());
     }
-    Err(MethodError::Failed(format!(
+    // An input error (exit code 2): the method cannot reconstruct this cloud.
+    Err(MethodError::InvalidInput(format!(
         "{name}: no face on {} points that are not collinear",
         points.len()
     )))
@@ -116,7 +118,7 @@ pub fn check_normals_not_collapsed(
     if normals.iter().any(|n| *n != DVec3::ZERO) || reconbench_geom::cloud::all_collinear(points) {
         return Ok(());
     }
-    Err(MethodError::Failed(format!(
+    Err(MethodError::InvalidInput(format!(
         "{name}: every one of the {} normals is zero-length although the points are not \
          collinear",
         normals.len()

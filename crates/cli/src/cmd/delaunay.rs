@@ -37,8 +37,9 @@ pub fn delaunay(a: DelaunayArgs) -> CliResult {
         .map_err(|e| CliError::input(format!("{}: {e}", a.cloud.display())))?;
     let validate = a.validate || (!a.no_validate && cloud.len() <= VALIDATE_DEFAULT_MAX);
     if validate {
-        dt.validate()
-            .map_err(|e| CliError::failure(format!("validation failed: {e}")))?;
+        dt.validate().map_err(|e| {
+            CliError::failure(format!("{}: validation failed: {e}", a.cloud.display()))
+        })?;
     }
     if a.json {
         print_json(dt.stats())

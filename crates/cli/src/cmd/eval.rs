@@ -117,6 +117,12 @@ fn print_report(r: &impl Report, json: bool) -> CliResult {
     Ok(())
 }
 
+/// An evaluation error (bad input, exit code 2) prefixed with the file it concerns.
+fn on_file(path: &std::path::Path, e: impl std::fmt::Display) -> CliError {
+    let shown = reconbench_geom::error::escape_control(&path.to_string_lossy()).into_owned();
+    CliError::input(format!("{shown}: {e}"))
+}
+
 /// `reconbench eval`.
 pub fn eval(a: EvalArgs) -> CliResult {
     if let Some(input) = &a.input {
@@ -130,7 +136,7 @@ pub fn eval(a: EvalArgs) -> CliResult {
     }
     opts.distance.seed = a.seed;
     opts.topology.self_intersections = a.self_intersections;
-    let e = eval_mesh(&mesh, &reference, &opts).map_err(CliError::input)?;
+    let e = eval_mesh(&mesh, &reference, &opts).map_err(|e| on_file(&a.mesh, e))?;
     print_report(&e, a.json)
 }
 
@@ -158,7 +164,7 @@ pub fn eval_normals(a: EvalNormalsArgs) -> CliResult {
             ));
         }
     }
-    .map_err(CliError::input)?;
+    .map_err(|e| on_file(&a.cloud, e))?;
     print_report(&e, a.json)
 }
 
@@ -185,6 +191,7 @@ pub fn eval_features(a: EvalFeaturesArgs) -> CliResult {
         radius_factor: a.radius_factor,
         ..FeatureOptions::default()
     };
-    let e = eval_cloud_features(&cloud, &reference, clean, &opts).map_err(CliError::input)?;
+    let e =
+        eval_cloud_features(&cloud, &reference, clean, &opts).map_err(|e| on_file(&a.cloud, e))?;
     print_report(&e, a.json)
 }

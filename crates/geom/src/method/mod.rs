@@ -46,6 +46,21 @@ pub enum MethodError {
     Failed(String),
 }
 
+impl MethodError {
+    /// True when the input or a parameter is at fault, not the method: the CLI exits
+    /// with code 2 for these (bad input) and 1 for the rest. `InvalidInput` covers
+    /// everything a method refuses about its cloud (too few or degenerate points, an
+    /// unusable scale, a result that would collapse to nothing on distinct points);
+    /// a shared geometry routine's error counts when [`GeomError::is_input`] says so.
+    pub fn is_input(&self) -> bool {
+        match self {
+            Self::InvalidInput(_) | Self::InvalidParameter { .. } => true,
+            Self::Geom(g) => g.is_input(),
+            Self::Stopped(_) | Self::Failed(_) => false,
+        }
+    }
+}
+
 /// A diagnostic value a method reports next to its result.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]

@@ -138,11 +138,17 @@ impl Poisson {
         };
         let solved = ctx
             .phase("solve", || poisson_reconstruction(&tc, &config))
-            .map_err(|e| MethodError::Failed(format!("poisson: {e}")))?;
+            .map_err(|e| match e {
+                // Too few points with normals, all in one spot: the input is at fault.
+                threecrate_core::Error::InvalidData(m) => {
+                    MethodError::InvalidInput(format!("poisson: {m}"))
+                }
+                e => MethodError::Failed(format!("poisson: {e}")),
+            })?;
         ctx.checkpoint()?;
         let (mut vertices, mut faces) = extract::canonical(&solved);
         if faces.is_empty() {
-            return Err(MethodError::Failed(format!(
+            return Err(MethodError::InvalidInput(format!(
                 "poisson: the iso-surface is empty (depth {}, {} points)",
                 p.depth,
                 keep.len()
