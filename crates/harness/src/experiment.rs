@@ -567,6 +567,10 @@ fn expand(file: &ExperimentFile, base: &Path) -> Result<(Vec<Cell>, Vec<String>)
     }
     let metrics = Value::Object(to_json(&file.metrics));
     metric_spec::validate_metric_options(&metrics)?;
+    metric_spec::metric_options(&metrics)?
+        .mesh
+        .validate()
+        .map_err(|e| HarnessError::input(format!("[metrics.mesh]: {e}")))?;
 
     let datasets = expand_datasets(file, base)?;
     let (perturbs, swept_all) = expand_perturbations(file)?;
@@ -1282,6 +1286,24 @@ mod tests {
                 "from 1 to",
             ),
             (format!("seeds = 10000000\n{base}{data}"), "at most 1000000"),
+            (
+                format!(
+                    "{base}[[datasets]]\nshape = \"sphere\"\npoints = 10\nsampler = \"grid:nu=1000000,nv=1000000\"\n"
+                ),
+                "1000000 x 1000000 grid",
+            ),
+            (
+                format!("{base}{data}[[perturbations]]\nduplicate = 1e9\n"),
+                "points added per input point",
+            ),
+            (
+                format!("{base}{data}[metrics.mesh.distance]\nmin_samples = 100000000000\n"),
+                "distance.min_samples",
+            ),
+            (
+                format!("{data}[[methods]]\nname = \"pf\"\nparams = {{ k = 1000000000000 }}\n"),
+                "neighbours per point",
+            ),
             (format!("timeout = 1e300\n{base}{data}"), "a week"),
             (
                 format!("memory_limit_mib = 0\n{base}{data}"),

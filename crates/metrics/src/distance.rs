@@ -91,7 +91,51 @@ impl Default for DistanceOptions {
     }
 }
 
+/// Most area samples per side: about 5 GB of samples and nearest-point records at the
+/// limit; an option or a mesh asking for more is refused before anything is allocated.
+pub const MAX_SAMPLES: usize = 100_000_000;
+
+/// Bytes per area sample of one side (position, closest point, distance, face).
+const BYTES_PER_SAMPLE: f64 = 56.0;
+
+fn check_samples(name: &'static str, n: usize) -> Result<()> {
+    if n <= MAX_SAMPLES {
+        return Ok(());
+    }
+    let gb = n as f64 * BYTES_PER_SAMPLE / 1e9;
+    Err(MetricsError::InvalidParameter {
+        name,
+        message: format!(
+            "{n} samples need about {}: at most {MAX_SAMPLES}",
+            if gb >= 1000.0 {
+                format!("{:.0} TB", gb / 1000.0)
+            } else {
+                format!("{gb:.0} GB")
+            }
+        ),
+    })
+}
+
 impl DistanceOptions {
+    /// Refuses sample counts above [`MAX_SAMPLES`] and a `samples_per_face` above
+    /// 10,000 (experiment files are checked with this when they load).
+    pub fn validate(&self) -> Result<()> {
+        check_samples("distance.min_samples", self.min_samples)?;
+        if let Some(n) = self.recon_samples {
+            check_samples("distance.recon_samples", n)?;
+        }
+        if let Some(n) = self.reference_samples {
+            check_samples("distance.reference_samples", n)?;
+        }
+        if self.samples_per_face > 10_000 {
+            return Err(MetricsError::InvalidParameter {
+                name: "distance.samples_per_face",
+                message: format!("{} must be at most 10000", self.samples_per_face),
+            });
+        }
+        Ok(())
+    }
+
     /// Both sample counts set to `n`.
     pub fn with_samples(mut self, n: usize) -> Self {
         self.recon_samples = Some(n);
@@ -256,6 +300,9 @@ pub fn eval_distance(
     let n_s = opts.reference_samples.unwrap_or_else(|| {
         default_sample_count(opts, reference.n_faces().unwrap_or(recon.n_faces()))
     });
+    opts.validate()?;
+    check_samples("samples", n_r)?;
+    check_samples("samples", n_s)?;
     if n_r == 0 || n_s == 0 {
         return Err(MetricsError::InvalidParameter {
             name: "samples",

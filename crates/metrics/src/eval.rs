@@ -42,6 +42,14 @@ pub struct MeshEvalOptions {
     pub skip_features: bool,
 }
 
+impl MeshEvalOptions {
+    /// Checks the options that bound the work (the distance sample counts), so an
+    /// experiment file asking for 1e11 samples is refused when it loads.
+    pub fn validate(&self) -> Result<()> {
+        self.distance.validate()
+    }
+}
+
 /// Everything [`eval_mesh`] measures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshEval {

@@ -722,3 +722,28 @@ fn every_reported_key_is_documented() {
         check(&k);
     }
 }
+
+/// Sample counts beyond what memory holds are refused before sampling, with the
+/// estimate (issue 28: `min_samples = 1e11` used to die of memory inside the cell).
+#[test]
+fn sample_counts_beyond_memory_are_refused_with_the_estimate() {
+    let mut o = MeshEvalOptions::default();
+    assert!(o.validate().is_ok());
+    o.distance.min_samples = 100_000_000_000;
+    let e = o.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("distance.min_samples") && e.contains("TB"),
+        "{e}"
+    );
+    let o = DistanceOptions::default().with_samples(200_000_000);
+    let e = o.validate().unwrap_err().to_string();
+    assert!(
+        e.contains("distance.recon_samples") && e.contains("GB"),
+        "{e}"
+    );
+    let o = DistanceOptions {
+        samples_per_face: 1_000_000,
+        ..Default::default()
+    };
+    assert!(o.validate().is_err());
+}

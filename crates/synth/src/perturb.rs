@@ -349,6 +349,10 @@ impl fmt::Display for PerturbSpec {
     }
 }
 
+/// Most points a perturbation may add per input point (`outliers`, `copies`,
+/// `duplicate` fractions).
+pub const MAX_ADDED_PER_POINT: f64 = 100.0;
+
 impl PerturbSpec {
     /// Checks parameter ranges.
     pub fn validate(&self) -> Result<()> {
@@ -358,6 +362,24 @@ impl PerturbSpec {
                 Ok(())
             } else {
                 Err(SynthError::invalid(&owner, k, format!("{v} must be >= 0")))
+            }
+        };
+        // Points added per input point: bounded, so a typo cannot ask for 1e9 copies.
+        let added = |k: &str, v: f64| {
+            nonneg(k, v)?;
+            if v <= MAX_ADDED_PER_POINT {
+                Ok(())
+            } else {
+                Err(SynthError::invalid(
+                    &owner,
+                    k,
+                    format!(
+                        "{v} points added per input point: at most {MAX_ADDED_PER_POINT} \
+                         (1,000 input points would become {:.3e} and need {})",
+                        1000.0 * (1.0 + v),
+                        crate::sampler::memory_estimate(1000.0 * (1.0 + v))
+                    ),
+                ))
             }
         };
         match *self {
@@ -375,11 +397,11 @@ impl PerturbSpec {
                 Ok(())
             }
             PerturbSpec::Outliers { fraction, inflate } => {
-                nonneg("fraction", fraction)?;
+                added("fraction", fraction)?;
                 nonneg("inflate", inflate)
             }
             PerturbSpec::DisplacedCopies { fraction, min, max } => {
-                nonneg("fraction", fraction)?;
+                added("fraction", fraction)?;
                 nonneg("min", min)?;
                 if max < min {
                     return Err(SynthError::invalid(
@@ -401,7 +423,7 @@ impl PerturbSpec {
                     ))
                 }
             }
-            PerturbSpec::Duplicate { fraction } => nonneg("fraction", fraction),
+            PerturbSpec::Duplicate { fraction } => added("fraction", fraction),
             PerturbSpec::Misalign {
                 groups,
                 angle,
@@ -515,7 +537,9 @@ pub fn apply(
             }
         }
         PerturbSpec::Outliers { fraction, inflate } => {
-            let m = (fraction * n as f64).round() as usize;
+            let m = (fraction * n as f64).round();
+            crate::sampler::check_count("perturbation 'outliers'", "fraction", n as f64 + m)?;
+            let m = m as usize;
             let pad = DVec3::splat(inflate * ctx.aabb.diagonal());
             let (lo, hi) = (ctx.aabb.min - pad, ctx.aabb.max + pad);
             let pts: Vec<DVec3> = (0..m)
@@ -530,7 +554,9 @@ pub fn apply(
             cloud.append(&outliers(pts));
         }
         PerturbSpec::DisplacedCopies { fraction, min, max } => {
-            let m = (fraction * n as f64).round() as usize;
+            let m = (fraction * n as f64).round();
+            crate::sampler::check_count("perturbation 'copies'", "fraction", n as f64 + m)?;
+            let m = m as usize;
             let d = ctx.aabb.diagonal();
             if n == 0 {
                 return Ok(());
@@ -587,10 +613,12 @@ pub fn apply(
             *cloud = cloud.select(&keep);
         }
         PerturbSpec::Duplicate { fraction } => {
-            let m = (fraction * n as f64).round() as usize;
+            let m = (fraction * n as f64).round();
             if n == 0 {
                 return Ok(());
             }
+            crate::sampler::check_count("perturbation 'duplicate'", "fraction", n as f64 + m)?;
+            let m = m as usize;
             let mut idx: Vec<usize> = (0..n).collect();
             idx.extend((0..m).map(|_| index(rng, n)));
             *cloud = cloud.select(&idx);

@@ -29,13 +29,52 @@ pub enum Density {
     Spacing(f64),
 }
 
+/// Most points one sample may hold (and most nodes of a `grid` sampler's `nu x nv`):
+/// a sampled cloud of that size already takes about 8 GB (positions, clean positions,
+/// normals, feature distances and ids, 84 bytes a point), so a request beyond it is
+/// refused before anything is allocated.
+pub const MAX_SAMPLES: usize = 100_000_000;
+
+/// Bytes per point of a sampled ground-truth cloud (for the estimates in messages).
+const BYTES_PER_SAMPLE: f64 = 84.0;
+
+/// "about 24 TB": the memory `n` sampled points would take.
+pub(crate) fn memory_estimate(n: f64) -> String {
+    let b = n * BYTES_PER_SAMPLE;
+    let (v, unit) = [(1e15, "PB"), (1e12, "TB"), (1e9, "GB"), (1e6, "MB")]
+        .into_iter()
+        .find(|(u, _)| b >= *u)
+        .map_or((b / 1e3, "kB"), |(u, name)| (b / u, name));
+    format!("about {v:.0} {unit}")
+}
+
+/// Refuses a point count above [`MAX_SAMPLES`], naming the memory it would need.
+pub(crate) fn check_count(owner: &str, name: &str, n: f64) -> Result<()> {
+    if n <= MAX_SAMPLES as f64 {
+        return Ok(());
+    }
+    Err(SynthError::invalid(
+        owner,
+        name,
+        format!(
+            "{n:.3e} points need {}: at most {MAX_SAMPLES} points",
+            memory_estimate(n)
+        ),
+    ))
+}
+
 impl Density {
-    /// The point count for `shape`.
+    /// The point count for `shape`; more than [`MAX_SAMPLES`] is refused.
     pub fn count(&self, shape: &dyn Shape) -> Result<usize> {
         match *self {
-            Density::Count(n) => Ok(n),
+            Density::Count(n) => {
+                check_count("density", "points", n as f64)?;
+                Ok(n)
+            }
             Density::Spacing(h) if h > 0.0 && h.is_finite() => {
-                Ok((shape.area() / (h * h)).ceil() as usize)
+                let n = (shape.area() / (h * h)).ceil();
+                check_count("density", "spacing", n)?;
+                Ok(n as usize)
             }
             Density::Spacing(h) => Err(SynthError::invalid(
                 "density",
@@ -230,6 +269,37 @@ impl SamplerSpec {
                 )
             }
             SamplerSpec::Stripes { count: 0, .. } => bad("count", "must be >= 1".into()),
+            SamplerSpec::Grid { nu, nv } if nu == Some(0) || nv == Some(0) => {
+                bad("nu/nv", "must be >= 1".into())
+            }
+            SamplerSpec::Grid {
+                nu: Some(nu),
+                nv: Some(nv),
+            } if nu as f64 * nv as f64 > MAX_SAMPLES as f64 => {
+                let n = nu as f64 * nv as f64;
+                bad(
+                    "nu/nv",
+                    format!(
+                        "a {nu} x {nv} grid has {n:.3e} nodes and needs {}: at most \
+                         {MAX_SAMPLES} nodes",
+                        memory_estimate(n)
+                    ),
+                )
+            }
+            SamplerSpec::Grid {
+                nu: Some(nu),
+                nv: None,
+            } if nu as f64 * nu as f64 > MAX_SAMPLES as f64 => {
+                let n = nu as f64 * nu as f64;
+                bad(
+                    "nu",
+                    format!(
+                        "a {nu} x {nu} grid has {n:.3e} nodes and needs {}: at most \
+                         {MAX_SAMPLES} nodes",
+                        memory_estimate(n)
+                    ),
+                )
+            }
             _ => Ok(()),
         }
     }
