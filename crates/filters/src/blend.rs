@@ -449,7 +449,7 @@ fn sample_line(tube: &Tube, index: &PointIndex, v: f64, d: f64, t: f64) -> Line 
         out.push(x);
         last_ok = Some(u);
         let l = tube.du_len(u, v);
-        if !(l > 0.0) {
+        if l.is_nan() || l <= 0.0 {
             break;
         }
         u += d / l;

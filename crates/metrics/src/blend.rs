@@ -185,7 +185,7 @@ fn chart_gap(cloud: &PointCloud, tag: &[i64], opts: &BlendOptions) -> Result<f64
         .find(|r| r.is_finite())
         .unwrap_or(0.0)
         .max(0.0);
-    if !(rho > 0.0) {
+    if rho.is_nan() || rho <= 0.0 {
         return Err(MetricsError::InvalidInput(
             "blend chart: the tube radius (radial - offset) is not positive".into(),
         ));
@@ -228,7 +228,7 @@ fn chart_gap(cloud: &PointCloud, tag: &[i64], opts: &BlendOptions) -> Result<f64
             }
             _ => l + offset[i] - s - height[i],
         };
-        if !(y.abs() <= band + 2.0) {
+        if y.is_nan() || y.abs() > band + 2.0 {
             continue;
         }
         match tag[i] {
@@ -250,7 +250,7 @@ fn chart_gap(cloud: &PointCloud, tag: &[i64], opts: &BlendOptions) -> Result<f64
     const SEARCH: f64 = 5.0;
     let step = opts.probe_sp;
     let (y_lo, y_hi) = (y_lo.max(-band), y_hi.min(band));
-    if !(y_lo < y_hi) {
+    if y_lo.is_nan() || y_hi.is_nan() || y_lo >= y_hi {
         return Ok(f64::NAN);
     }
     let rows = ((y_hi - y_lo) / step).floor() as usize;
