@@ -759,6 +759,12 @@ pub fn render_comparison(
     let legend_h = 2 * LINE_H + bar_h + 10 + 4 * LINE_H + 8;
     let width = PAD + cols * (pw + PAD) + LEGEND_W;
     let height = (TITLE_H + rows as u32 * band_h).max(TITLE_H + legend_h) + PAD;
+    if u64::from(width) * u64::from(height) > 100_000_000 {
+        return Err(HarnessError::input(format!(
+            "render: an image of {width} x {height} pixels ({} panels of {view} pixels) is too large; lower report.render_size",
+            panels.len()
+        )));
+    }
     let mut img = Image::new(width, height);
     let datas: Vec<&RenderData> = panels.iter().filter_map(|p| p.data).collect();
     let frame = Frame::of(&datas);

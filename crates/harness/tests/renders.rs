@@ -288,6 +288,11 @@ fn one_panel_per_method_side_by_side() {
     let cmp = render_comparison("t", &many, &Scale::fixed(0.01), VIEW).unwrap();
     assert_eq!(cmp.panels.len(), 10);
     assert!(cmp.panels[9].y > cmp.panels[0].y);
+    // An image too large to allocate sensibly is refused with the option to change.
+    let e = render_comparison("t", &many, &Scale::fixed(0.01), 4096)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("too large") && e.contains("render_size"), "{e}");
 }
 
 #[test]
