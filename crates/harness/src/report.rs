@@ -685,7 +685,13 @@ fn write_renders(
             })
             .collect();
         let title = format!("{dataset} / {perturb} (seed index {seed})");
-        let cmp = render_comparison(&title, &panels, &scale, opts.render_size)?;
+        let cmp = match render_comparison(&title, &panels, &scale, opts.render_size) {
+            Ok(c) => c,
+            Err(e) => {
+                notes.push(format!("{dataset} / {perturb}: {e}"));
+                continue;
+            }
+        };
         let mut stem = format!("{}_{}", slug(dataset), slug(perturb));
         let base = stem.clone();
         let mut n = 2;
