@@ -328,9 +328,15 @@ mod tests {
         assert_eq!(working_scale_exponent_within(&pts(1.0), 32), None);
         assert_eq!(working_scale_exponent_within(&pts(2f64.powi(31)), 32), None);
         // 0.75 * 2^40 lies outside 2^32: moved into [1/2, 1) by 2^-40.
-        assert_eq!(working_scale_exponent_within(&pts(2f64.powi(40)), 32), Some(-40));
+        assert_eq!(
+            working_scale_exponent_within(&pts(2f64.powi(40)), 32),
+            Some(-40)
+        );
         assert_eq!(working_scale_exponent(&pts(2f64.powi(40))), None);
-        assert_eq!(working_scale_exponent_within(&pts(2f64.powi(-40)), 32), Some(40));
+        assert_eq!(
+            working_scale_exponent_within(&pts(2f64.powi(-40)), 32),
+            Some(40)
+        );
         // 0 bits: everything outside [1, 1] moves, and the range never exceeds 2^±64.
         assert_eq!(working_scale_exponent_within(&pts(1.0), 0), Some(0));
         assert_eq!(

@@ -4,8 +4,8 @@
 
 use reconbench_features::{GaussMap, GaussMapAdaptive, PcaVariation};
 use reconbench_filters::StatisticalOutliers;
-use reconbench_filters::{EbtThinning, GridThinning, RandomThinning};
 use reconbench_filters::{Blend, Mls, MlsSharp};
+use reconbench_filters::{EbtThinning, GridThinning, RandomThinning};
 use reconbench_normals::{Jet, LvmApprox, PlaneFit, WeightedPlaneFit};
 use reconbench_recon::Ebt;
 use reconbench_recon::HcIt;
