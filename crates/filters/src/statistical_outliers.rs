@@ -110,8 +110,13 @@ impl Filter for StatisticalOutliers {
                 diagnostics,
             });
         }
+        // Distances on the cloud moved exactly by a power of two into the working range
+        // (squared distances at 1e200 overflow, at 1e-160 vanish): the same points are
+        // kept at every scale; `distance_limit` is reported in the cloud's units.
+        let s = reconbench_geom::cloud::working_scale_exponent(cloud.positions());
+        let moved = s.map(|s| reconbench_geom::cloud::scale_pow2(cloud.positions(), s));
         let d = ctx.phase("knn", || {
-            mean_knn_distances(cloud.positions(), self.params.k)
+            mean_knn_distances(moved.as_deref().unwrap_or(cloud.positions()), self.params.k)
         })?;
         ctx.checkpoint()?;
         let mean = d.iter().sum::<f64>() / n as f64;
@@ -125,7 +130,11 @@ impl Filter for StatisticalOutliers {
             "removed".into(),
             Diagnostic::Number((n - keep.len()) as f64),
         );
-        diagnostics.insert("distance_limit".into(), Diagnostic::Number(limit));
+        let limit_here = match s {
+            Some(s) => reconbench_geom::cloud::scale_pow2(&[glam::DVec3::splat(limit)], -s)[0].x,
+            None => limit,
+        };
+        diagnostics.insert("distance_limit".into(), Diagnostic::Number(limit_here));
         Ok(Filtered {
             cloud: out,
             source: Some(keep.iter().map(|&i| i as u32).collect()),

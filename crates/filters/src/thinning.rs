@@ -217,7 +217,12 @@ impl Filter for GridThinning {
 
     fn filter(&self, cloud: &PointCloud, ctx: &mut RunCtx) -> Result<Filtered, MethodError> {
         check_cloud(cloud)?;
-        let p = cloud.positions();
+        // Cells are picked on the cloud moved exactly by a power of two into the working
+        // range (a subnormal cloud's diagonal would underflow to 0): the same indices
+        // at every scale; `cell_size` is a fraction of the diagonal either way.
+        let moved = reconbench_geom::cloud::working_scale_exponent(cloud.positions())
+            .map(|s| reconbench_geom::cloud::scale_pow2(cloud.positions(), s));
+        let p = moved.as_deref().unwrap_or(cloud.positions());
         let target = self.params.target;
         let bb = Aabb::from_points(p);
         let diag = bb.diagonal();

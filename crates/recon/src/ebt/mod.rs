@@ -78,8 +78,35 @@ fn check_input(cloud: &PointCloud, need: usize) -> Result<f64, MethodError> {
     Ok(diag)
 }
 
-/// Stages 1-3 of EBT on `cloud`: M's, Omega, B and the kept points.
+/// Stages 1-3 of EBT on `cloud`: M's, Omega, B and the kept points. Runs on the
+/// cloud moved exactly by a power of two into the working range when it lies outside
+/// (`PointCloud::at_working_scale`: the quadric fits' squared coordinates neither
+/// overflow nor vanish), so the kept points are the same at every scale; lengths come
+/// back in the input's units, curvatures in their inverse.
 pub fn thin(
+    cloud: &PointCloud,
+    p: &ThinningParams,
+    ctx: &mut RunCtx,
+) -> Result<Thinned, MethodError> {
+    let Some((scaled, s)) = cloud.at_working_scale() else {
+        return thin_in_range(cloud, p, ctx);
+    };
+    let mut t = thin_in_range(&scaled, p, ctx)?;
+    let back = |x: f64, e: i32| crate::scale::times_pow2(x, e);
+    t.omega = back(t.omega, -s);
+    t.bin = back(t.bin, -s);
+    t.diag = back(t.diag, -s);
+    if let Some(c) = &mut t.curvature {
+        c.m = c.m.map(|m| back(m, s));
+        for q in &mut c.per_patch {
+            *q = q.map(|m| back(m, s));
+        }
+    }
+    Ok(t)
+}
+
+/// [`thin`] on a cloud already in the working range.
+fn thin_in_range(
     cloud: &PointCloud,
     p: &ThinningParams,
     ctx: &mut RunCtx,
