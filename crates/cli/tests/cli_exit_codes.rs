@@ -294,3 +294,33 @@ fn evaluation_errors_name_the_file() {
     );
     check_refused("eval-features at 1e-9", &r, &["tiny.ply"]);
 }
+
+#[test]
+fn a_second_run_into_a_held_directory_refuses_naming_the_holder_and_touches_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("e.toml"),
+        "name = \"e\"\n[[datasets]]\nshape = \"sphere\"\npoints = 100\n\
+         [[methods]]\nname = \"gt-normals\"\n[report]\nplots = false\nrenders = false\n",
+    )
+    .unwrap();
+    let (first, _) = run(&["run", "e.toml", "--out", "out", "--no-report"], d);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let results = d.join("out/results.jsonl");
+    let before = std::fs::read(&results).unwrap();
+    // A live run holds the directory (PID 1 always exists).
+    std::fs::write(d.join("out/results.jsonl.lock"), "1\n").unwrap();
+    for extra in [&[][..], &["--fresh"][..], &["--resume"][..]] {
+        let mut args = vec!["run", "e.toml", "--out", "out", "--no-report"];
+        args.extend(extra);
+        let what = format!("run {extra:?} while held");
+        check_refused(&what, &run(&args, d), &["PID 1", "out"]);
+        assert_eq!(std::fs::read(&results).unwrap(), before, "{what}");
+        assert!(!d.join("out/previous").exists(), "{what}: moved aside");
+    }
+}

@@ -175,9 +175,12 @@ pub fn run(exp: &Experiment, opts: &RunOptions) -> Result<RunSummary> {
     let (results_name, manifest_name) = result_file_names(opts.shard);
     let results = opts.out_dir.join(&results_name);
     let manifest_path = opts.out_dir.join(manifest_name);
-    set_aside_earlier(opts, &results, &manifest_path)?;
-    // One run per results file at a time (shards write their own files).
+    // One run per results file at a time (shards write their own files). Taken before
+    // anything looks at earlier rows: a second run must refuse naming the holder, not
+    // report the first one's rows as "an earlier run" or, with --fresh, move them aside
+    // while they are being written.
     let _lock = crate::lock::RunLock::acquire(&opts.out_dir.join(format!("{results_name}.lock")))?;
+    set_aside_earlier(opts, &results, &manifest_path)?;
     let cells = shard_cells(&exp.cells, opts.shard);
     let limits = Limits {
         timeout_s: opts.timeout_s.unwrap_or(exp.timeout_s),
