@@ -1,6 +1,6 @@
 //! Scale robustness of `ufm`, `ufm-mesh`, `cocone`, `tight-cocone`, `hc-it`, `ebt`,
-//! `ball-pivoting` and `poisson`: a cloud multiplied by a power of two gives
-//! the same faces on the input's own points, at any representable scale; decimal scales
+//! `priority-front`, `ball-pivoting` and `poisson`: a cloud multiplied by a power of two
+//! gives the same faces on the input's own points, at any representable scale; decimal scales
 //! give a closed mesh; nothing hangs or collapses to an empty success.
 
 use glam::DVec3;
@@ -8,8 +8,8 @@ use reconbench_geom::PointCloud;
 use reconbench_geom::method::Diagnostic;
 use reconbench_geom::method::{NormalEstimator, Reconstructor, RunCtx};
 use reconbench_recon::{
-    BallPivoting, BallPivotingParams, Cocone, Ebt, HcIt, Poisson, PoissonParams, TightCocone, Ufm,
-    UfmMesh, UfmMeshParams,
+    BallPivoting, BallPivotingParams, Cocone, Ebt, HcIt, Poisson, PoissonParams, PriorityFront,
+    TightCocone, Ufm, UfmMesh, UfmMeshParams,
 };
 use reconbench_testkit::points as samples;
 
@@ -74,6 +74,7 @@ fn others() -> Vec<Box<dyn Reconstructor>> {
         Box::new(TightCocone::default()),
         Box::new(HcIt::default()),
         Box::new(Ebt::default()),
+        Box::new(PriorityFront::default()),
     ]
 }
 

@@ -37,6 +37,7 @@ use std::time::Instant;
 use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use reconbench_geom::cloud::WORKING_SCALE_BITS;
 use reconbench_geom::method::{
     Diagnostic, Diagnostics, MethodError, Reconstruction, Reconstructor, RunCtx,
 };
@@ -45,6 +46,7 @@ use reconbench_geom::{PointCloud, TriMesh};
 pub use params::{PARAM_DOCS, PriorityFrontParams, RhoSample, ScoreDistance};
 
 use crate::diag::num;
+use crate::scale::times_pow2;
 use density::{duplicates, mean_nn, search_grid};
 use grid::Grid;
 use mesher::{Cfg, FREE, Mesher, REFUSED, Stats};
@@ -86,7 +88,36 @@ impl Reconstructor for PriorityFront {
         NAME
     }
 
+    /// Runs on the exact power-of-two working-scale copy of the cloud (every parameter
+    /// is relative to ρ or R), so coordinates near 1e±160 or 1e308 neither overflow nor
+    /// underflow; the length diagnostics are given back in the cloud's units.
     fn reconstruct(
+        &self,
+        cloud: &PointCloud,
+        ctx: &mut RunCtx,
+    ) -> Result<Reconstruction, MethodError> {
+        self.params.validate()?;
+        crate::scale::reconstruct_at_scale(NAME, cloud, WORKING_SCALE_BITS, |c, s| {
+            let mut r = self.reconstruct_unscaled(c, ctx)?;
+            if s != 0 {
+                for key in ["rho", "radius", "boundary_loop_centroids"] {
+                    match r.diagnostics.get_mut(key) {
+                        Some(Diagnostic::Number(x)) => *x = times_pow2(*x, -s),
+                        Some(Diagnostic::Series(v)) => {
+                            v.iter_mut().for_each(|x| *x = times_pow2(*x, -s))
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            Ok(r)
+        })
+    }
+}
+
+impl PriorityFront {
+    /// The method on `cloud` as given (see [`Reconstructor::reconstruct`]).
+    fn reconstruct_unscaled(
         &self,
         cloud: &PointCloud,
         ctx: &mut RunCtx,
