@@ -86,12 +86,17 @@ fn torus_without_hole_closing_keeps_only_small_loops() {
 #[test]
 fn apex_rule_variant_refuses_more_clean_points() {
     let pts = blue(Surface::Torus(1.0, 0.35), 6000, 2);
-    let off = run(pts.clone(), closing_params(), 2);
+    // The growth's refusals, before IMPL-CHOICE I15 inserts the covered points.
+    let growth = PriorityFrontParams {
+        insert_covered: false,
+        ..closing_params()
+    };
+    let off = run(pts.clone(), growth.clone(), 2);
     let on = run(
         pts,
         PriorityFrontParams {
             apex_angle_rule: true,
-            ..closing_params()
+            ..growth
         },
         2,
     );
@@ -484,11 +489,15 @@ fn creases_are_meshed_watertight_with_few_refused_points() {
 fn uniform_box_crease_regression() {
     let pts = synth_cloud("box", false, 6000, 1);
     // I8's evidence was measured without `reject_free_inside` (the default since issue
-    // 20, which keeps points from being covered and refuses 66-80 here either way).
+    // 20, which keeps points from being covered and refuses 66-80 here either way) and
+    // without I14 / I15 (with I14 I8 refuses about 600 points here: triangles across a
+    // crease that would cross the other face's mesh; I15 then inserts them, below).
     let refused = |k: usize| {
         let p = PriorityFrontParams {
             support_neighbours: k,
             reject_free_inside: false,
+            self_intersection_check: false,
+            insert_covered: false,
             ..PriorityFrontParams::default()
         };
         let rec = run(pts.clone(), p, 0);
@@ -510,11 +519,15 @@ fn uniform_box_crease_regression() {
 /// up to 9 rho): the harness torus `torus:R=2,r=0.7`, 35,947 blue-noise points, seed 3.
 /// IMPL-CHOICE I9 (`stitch_zip`) zips such loop pairs; without it the mesh is two
 /// components with four boundary loops (checked too, so the test sees the fix work).
+/// Measured with I14 and I15 off: with I14 on (the default) this run keeps three loops
+/// of 3-4 edges that neither the zip nor the I15 fill closes (an ear would cross).
 #[test]
 fn two_thread_stitch_closes_the_band_on_a_36k_torus() {
     let pts = synth_cloud("torus:R=2,r=0.7", true, 35_947, 3);
     let p = PriorityFrontParams {
         threads: 2,
+        self_intersection_check: false,
+        insert_covered: false,
         ..PriorityFrontParams::default()
     };
     let rec = run(pts.clone(), p.clone(), 0);

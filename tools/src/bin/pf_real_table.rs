@@ -8,7 +8,9 @@
 //! argument ending in `.ply` is read as the path of a mesh).
 //! Environment: `PF_THREADS` (comma list, default `1,2`), `PF_SEEDS` (comma list,
 //! default `1,2,3`), `RECON_PARAMS` (JSON parameters; `threads` is overridden),
-//! `PF_NOSELF` (skip the self-intersection count, which dominates the probe's time).
+//! `PF_NOSELF` (skip the self-intersection count, which dominates the probe's time),
+//! `PF_DETAIL` (also print each component's faces, genus and loops, and each boundary
+//! loop's edges, length and centroid).
 
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Reconstructor, RunCtx};
@@ -100,7 +102,46 @@ fn main() {
                     rec.refused.len(),
                     rec.mesh.n_faces(),
                 );
+                if std::env::var("PF_DETAIL").is_ok() {
+                    print_detail(&rec.mesh, &topo);
+                }
             }
         }
+    }
+}
+
+/// Each component's faces, genus and loops; each boundary loop's edges, length and the
+/// centroid of its vertices.
+fn print_detail(mesh: &reconbench_geom::TriMesh, topo: &reconbench_geom::topology::TopologyReport) {
+    for (i, c) in topo.component_details.iter().enumerate() {
+        println!(
+            "  component {i}: {} faces, genus {:?}, {} loops",
+            c.faces, c.genus, c.boundary_loops
+        );
+    }
+    let v = mesh.vertices();
+    let mut count = std::collections::HashMap::<(u32, u32), u32>::new();
+    for f in mesh.faces() {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    for l in &topo.boundary_loops {
+        println!(
+            "  loop: {} edges, length {:.4}, component {}",
+            l.edges, l.length, l.component
+        );
+    }
+    let bnd: Vec<glam::DVec3> = count
+        .iter()
+        .filter(|(_, c)| **c == 1)
+        .map(|((a, _), _)| v[*a as usize])
+        .collect();
+    if !bnd.is_empty() {
+        println!(
+            "  boundary vertices (first 20): {:?}",
+            &bnd[..bnd.len().min(20)]
+        );
     }
 }

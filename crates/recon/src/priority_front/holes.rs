@@ -12,6 +12,7 @@
 
 use glam::DVec3;
 
+use super::complete::min_angle_cos;
 use super::mesher::{ACCEPTED, Mesher, tri_normal};
 
 impl Mesher<'_> {
@@ -113,21 +114,6 @@ impl Mesher<'_> {
         self.done_near = near;
         self.hits_mesh(tri)
     }
-}
-
-/// Cosine of the smallest angle of triangle `(p, q, r)` (NaN when degenerate); smaller
-/// is better.
-fn min_angle_cos(p: DVec3, q: DVec3, r: DVec3) -> f64 {
-    let c = |x: DVec3, y: DVec3, z: DVec3| {
-        let (u, v) = (y - x, z - x);
-        let d = (u.length_squared() * v.length_squared()).sqrt();
-        if d > 0.0 { u.dot(v) / d } else { f64::NAN }
-    };
-    let (a, b, cc) = (c(p, q, r), c(q, r, p), c(r, p, q));
-    if a.is_nan() || b.is_nan() || cc.is_nan() || (q - p).cross(r - p).length_squared() == 0.0 {
-        return f64::NAN;
-    }
-    a.max(b).max(cc)
 }
 
 impl Mesher<'_> {

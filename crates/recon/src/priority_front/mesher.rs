@@ -99,6 +99,7 @@ pub(crate) struct Stats {
     /// Candidates refused by IMPL-CHOICE I14 (they would cross a mesh face).
     pub self_rejects: u64,
     pub holes_closed: u64,
+    pub holes_filled: u64,
 }
 
 impl Stats {
@@ -119,6 +120,7 @@ impl Stats {
         self.interior_rejects += o.interior_rejects;
         self.self_rejects += o.self_rejects;
         self.holes_closed += o.holes_closed;
+        self.holes_filled += o.holes_filled;
     }
 }
 

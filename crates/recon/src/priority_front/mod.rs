@@ -8,7 +8,10 @@
 //! the normal-change bound β_max = 90°, ranked by the score
 //! C = w1 cos β + w2 cos γ + w3 (R - d)/R, and validated by a 2-D crossing test; the
 //! winner is joined, filled, linked or glued into the front. Restarts seed the Free
-//! patches left; points never used are refused as noise.
+//! patches left; points never used are refused as noise. By default (deviations, issue
+//! 20) candidates that would cross the mesh are refused (I14), and after growth the
+//! holes that close under the length bound are closed and the covered points inserted
+//! (I15).
 //!
 //! Output: a consistently oriented manifold mesh whose vertices are the input points
 //! (refused points are unreferenced vertices), the refused indices, and diagnostics
@@ -18,9 +21,11 @@
 //! Files: [`params`] (parameters), `grid` (hash grid, front-vertex index), `density`
 //! (ρ, duplicates, exact neighbour search), `seed` (§4.2), `mesher` (state and the four
 //! operations), `triangulate` (§4.4 and the main loop), `cross` (2-D crossing test),
-//! `adjacency` (edge map of front vertices), `run` (restarts), `parallel` (slabs).
+//! `adjacency` (edge map of front vertices), `run` (restarts), `parallel` (slabs),
+//! `holes` (I7 small loops, I9 zip), `complete` (I15 surface completion).
 
 mod adjacency;
+mod complete;
 mod cross;
 mod density;
 mod grid;
@@ -177,13 +182,15 @@ impl PriorityFront {
 
         // M0-M8.
         let t_grow = Instant::now();
-        let grown = if p.threads <= 1 {
+        let mut grown = if p.threads <= 1 {
             grow_serial(&lay, cfg, &dcfg, &mut rng, ctx, t_grow)?
         } else {
             let outs = grow_slabs_phase(&lay, &cfg, &dcfg, ctx, t_grow)?;
             stitch_phase(&lay, cfg, &dcfg, &outs, &mut rng, ctx)?
         };
         let grow_secs = t_grow.elapsed().as_secs_f64();
+        let inserted = insert_phase(&mut grown, &lay, p, rho, ctx);
+        num(&mut diag, "inserted_points", inserted as f64);
 
         // M9: Free points become Refused; map back to input indices.
         let (faces, refused) = output_phase(&grown, &lay.order, n, ctx);
@@ -410,6 +417,7 @@ fn grow_serial(
     let mut m = Mesher::new(&lay.pts, &lay.grid, cfg, &lay.refused0);
     m.run_domain(dcfg, rng, ctx)?;
     m.stats.holes_closed = m.close_small_holes(p.close_holes_max);
+    m.stats.holes_filled = fill_phase(&mut m, p);
     end_phase(ctx, "grow", t_grow);
     Ok(take_grown(&mut m))
 }
@@ -465,8 +473,46 @@ fn stitch_phase(
     if p.stitch_zip {
         m.stats.holes_closed += m.zip_parallel_loops();
     }
+    m.stats.holes_filled = fill_phase(&mut m, p);
     end_phase(ctx, "stitch", t_st);
     Ok(take_grown(&mut m))
+}
+
+/// IMPL-CHOICE I15, holes: the loops that close whole under `fill_holes_max_edge` R.
+fn fill_phase(m: &mut Mesher, p: &PriorityFrontParams) -> u64 {
+    let max_edge = p.fill_holes_max_edge * m.cfg.r;
+    m.fill_holes(max_edge, p.fill_holes_edge_rel, p.fill_holes_max_loop)
+}
+
+/// IMPL-CHOICE I15, points (timed as `complete`): the unmeshed points covered by a
+/// triangle are inserted into it. Returns how many.
+fn insert_phase(
+    grown: &mut Grown,
+    lay: &Layout,
+    p: &PriorityFrontParams,
+    rho: f64,
+    ctx: &mut RunCtx,
+) -> usize {
+    if !p.insert_covered {
+        return 0;
+    }
+    ctx.phase("complete", || {
+        complete::insert_covered(
+            &lay.pts,
+            &lay.grid,
+            &mut grown.tris,
+            &mut grown.state,
+            &lay.refused0,
+            complete::CoverBound {
+                h_abs: p.free_inside_height * rho,
+                h_rel: p.free_inside_rel,
+                radius: p.k * rho,
+                plane_radius: 2.5 * rho,
+                plane_abs: p.insert_height * rho,
+                plane_rel: p.insert_rel,
+            },
+        )
+    })
 }
 
 /// M9 (timed as `output`): the faces in input indices and the sorted input indices of
@@ -514,6 +560,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
     num(diag, "self_rejects", s.self_rejects as f64);
     num(diag, "boundary_loops", grown.loops.len() as f64);
     num(diag, "holes_closed", s.holes_closed as f64);
+    num(diag, "holes_filled", s.holes_filled as f64);
     diag.insert(
         "boundary_loop_sizes".into(),
         Diagnostic::Series(grown.loops.iter().map(|l| l.len() as f64).collect()),
@@ -530,7 +577,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},insert:{},plane_h<=max({}rho,{}rms) threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -560,6 +607,12 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.front_inside_check,
         p.close_holes_max,
         p.stitch_zip,
+        p.fill_holes_max_edge,
+        p.fill_holes_edge_rel,
+        p.fill_holes_max_loop,
+        p.insert_covered,
+        p.insert_height,
+        p.insert_rel,
         p.threads
     )
 }

@@ -103,7 +103,8 @@ pub struct PriorityFrontParams {
     /// triangle sharing none of its vertices (IMPL-CHOICE I14, not in the paper; exact
     /// predicates, the self-intersection metric's test): the 2-D crossing and inside
     /// tests see one projection plane, so a front that reaches another sheet across a
-    /// thin part or a notch can cut through the mesh there. false = the paper.
+    /// thin part or a notch can cut through the mesh there. false = the paper; default
+    /// true (a deviation, issue 20).
     pub self_intersection_check: bool,
     /// Reject a candidate when a front vertex near the edge projects strictly inside the
     /// 2-D triangle (a, t, b) (IMPL-CHOICE I6, not in the paper; default true): the
@@ -171,6 +172,28 @@ pub struct PriorityFrontParams {
     /// paper, which leaves them to an external hole filler; default 10). 0 = off (the
     /// paper). Larger loops stay and are reported as holes / boundaries.
     pub close_holes_max: usize,
+    /// Surface completion, holes (IMPL-CHOICE I15, a deviation; issue 20): after
+    /// growth, every loop that ear clipping closes whole with new edges at most this
+    /// many R long (no fold over 120 degrees, no crossing) is closed; wider holes are
+    /// kept untouched. 0 = off (the paper). Default 1.
+    pub fill_holes_max_edge: f64,
+    /// I15: where the loop's own longest edge times this exceeds `fill_holes_max_edge`
+    /// R, that is the bound on new edges instead (sparse regions of CAD vertex sets,
+    /// whose edges exceed R; default 1.5).
+    pub fill_holes_edge_rel: f64,
+    /// Loops of more vertices than this are not tried by the I15 hole fill (cost
+    /// bound; default 4096).
+    pub fill_holes_max_loop: usize,
+    /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
+    /// projects into a triangle within the I12 height bound of it (a covered point) is
+    /// inserted there. false = the paper (such points are refused). Default true.
+    pub insert_covered: bool,
+    /// I15: a covered point is inserted only when it lies within max(`insert_height`
+    /// rho, `insert_rel` x their RMS residual) of the least-squares plane of its 12
+    /// nearest neighbours; others stay refused as noise (default 0.1).
+    pub insert_height: f64,
+    /// I15: relative part of that bound, in RMS residuals of the neighbours (default 3).
+    pub insert_rel: f64,
     /// Multi-seed restart while Free point patches remain (spec M8; default true).
     pub restart: bool,
     /// Minimum size of a Free point patch (R-graph component) that triggers a restart
@@ -219,7 +242,9 @@ impl Default for PriorityFrontParams {
             free_inside_height: 0.5,
             free_inside_rel: 0.25,
             interior_inside_check: false,
-            self_intersection_check: false,
+            // DEVIATION (issue 20): IMPL-CHOICE I14 on by default; without it the real
+            // vertex sets fold over the mesh (mechpart genus 6-16 instead of 3).
+            self_intersection_check: true,
             front_inside_check: true,
             fill_any_angle: true,
             sector_check: true,
@@ -235,6 +260,13 @@ impl Default for PriorityFrontParams {
             stitch_one_sided: true,
             stitch_zip: true,
             close_holes_max: 10,
+            // DEVIATION (issue 20): surface completion, IMPL-CHOICE I15.
+            fill_holes_max_edge: 1.0,
+            fill_holes_edge_rel: 1.5,
+            fill_holes_max_loop: 4096,
+            insert_covered: true,
+            insert_height: 0.1,
+            insert_rel: 3.0,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -356,6 +388,36 @@ impl PriorityFrontParams {
         if self.close_holes_max > 1_000_000 {
             return Err(bad("close_holes_max", "must be <= 1000000"));
         }
+        if !(self.fill_holes_max_edge >= 0.0 && self.fill_holes_max_edge <= 100.0) {
+            return Err(bad(
+                "fill_holes_max_edge",
+                format!(
+                    "must be in [0, 100] (units of R), got {}",
+                    self.fill_holes_max_edge
+                ),
+            ));
+        }
+        if !(self.fill_holes_edge_rel >= 0.0 && self.fill_holes_edge_rel <= 100.0) {
+            return Err(bad(
+                "fill_holes_edge_rel",
+                format!("must be in [0, 100], got {}", self.fill_holes_edge_rel),
+            ));
+        }
+        if !(self.insert_height >= 0.0 && self.insert_height <= 1000.0) {
+            return Err(bad(
+                "insert_height",
+                format!("must be in [0, 1000] (rho), got {}", self.insert_height),
+            ));
+        }
+        if !(self.insert_rel >= 0.0 && self.insert_rel <= 1000.0) {
+            return Err(bad(
+                "insert_rel",
+                format!("must be in [0, 1000], got {}", self.insert_rel),
+            ));
+        }
+        if self.fill_holes_max_loop > 1_000_000 {
+            return Err(bad("fill_holes_max_loop", "must be <= 1000000"));
+        }
         if self.revisit_passes > 1000 {
             return Err(bad("revisit_passes", "must be <= 1000"));
         }
@@ -454,7 +516,7 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
     ParamDoc::new(
         "self_intersection_check",
         Unit::Flag,
-        "I14: reject t when (a,t,b) would intersect a mesh triangle sharing no vertex with it (false; issue 20)",
+        "I14: reject t when (a,t,b) would intersect a mesh triangle sharing no vertex with it (true; false = paper)",
     ),
     ParamDoc::new(
         "interior_inside_check",
@@ -535,6 +597,36 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "close_holes_max",
         Unit::Count,
         "ear-clip leftover loops of at most this many vertices (I7: 10; 0 = paper)",
+    ),
+    ParamDoc::new(
+        "fill_holes_max_edge",
+        Unit::None,
+        "I15: close loops that ear clipping closes whole with new edges <= this x R (1; 0 = paper)",
+    ),
+    ParamDoc::new(
+        "fill_holes_edge_rel",
+        Unit::None,
+        "I15: or this x the loop's longest edge where larger (sparse regions; 1.5)",
+    ),
+    ParamDoc::new(
+        "fill_holes_max_loop",
+        Unit::Count,
+        "I15: loops with more vertices are not tried (4096)",
+    ),
+    ParamDoc::new(
+        "insert_covered",
+        Unit::Flag,
+        "I15: insert unmeshed points covered by a triangle into it (true; false = paper)",
+    ),
+    ParamDoc::new(
+        "insert_height",
+        Unit::Spacing,
+        "I15: insert a covered point only within this height of its neighbours' plane, in rho (0.1)",
+    ),
+    ParamDoc::new(
+        "insert_rel",
+        Unit::None,
+        "I15: ... or within this many RMS residuals of the neighbours from that plane (3)",
     ),
     ParamDoc::new(
         "restart",

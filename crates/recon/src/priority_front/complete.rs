@@ -1,0 +1,529 @@
+//! Surface completion after growth (IMPL-CHOICE I15, not in the paper; issue 20).
+//!
+//! The paper leaves every loop that survives growth as a hole and every point no front
+//! reached as refused noise. On real vertex sets both are mostly artefacts: thin slits
+//! where two fronts met at a crease, and points left *under* a triangle whose front
+//! passed over them (`docs/methods/priority_front.md`, "Real data"). Two steps:
+//!
+//! 1. [`Mesher::fill_holes`]: a loop is closed when ear clipping can close it **whole**
+//!    with every new edge at most `max_edge` long, no ear folded against its neighbour
+//!    (more than 120 degrees) and no ear crossing a mesh face or another ear (the exact
+//!    test of IMPL-CHOICE I14). Otherwise nothing is added to it. A hole wider than
+//!    `max_edge` (a scan hole, an open end) cannot be closed under that bound and is
+//!    kept, with its rim untouched; a slit between two fronts is zipped.
+//! 2. [`insert_covered`]: every point left unmeshed that projects into a triangle
+//!    within the I12 height bound of it (the definition of a covered point) and lies on
+//!    the plane of its neighbours (`insert_height`, `insert_rel`: so that outliers near
+//!    the surface stay refused) is inserted there: the triangle is split in three (or,
+//!    beside a crease, its nearest edge is split). The mesh stays interpolating,
+//!    manifold and consistently oriented; its topology does not change. Points that are
+//!    above no triangle or farther from it (outliers) stay refused.
+
+use glam::DVec3;
+use reconbench_geom::linalg::{covariance, sym_eigen3_smallest};
+use reconbench_geom::spatial::tri_tri_intersect;
+
+use super::grid::{Grid, NONE};
+use super::mesher::{ACCEPTED, Mesher, tri_normal};
+
+/// Cosine of the largest fold allowed between an ear and the face across its old edges
+/// (120 degrees, the paper's alpha_max).
+const COS_MAX_FOLD: f64 = -0.5;
+
+/// One planned ear: the loop corner it removes (`z -> a -> b`) and its normal.
+#[derive(Clone, Copy)]
+struct Ear {
+    z: u32,
+    a: u32,
+    b: u32,
+    n: DVec3,
+}
+
+impl Mesher<'_> {
+    /// Builds the IMPL-CHOICE I14 face index of the triangles made so far and turns the
+    /// check on (the completion always checks for crossings).
+    pub fn enable_self_check(&mut self) {
+        if self.cfg.self_check {
+            return;
+        }
+        self.cfg.self_check = true;
+        let n = self.pts.len();
+        self.vf_head = vec![NONE; n];
+        self.v_reach = vec![0.0; n];
+        let tris = std::mem::take(&mut self.tris);
+        self.vf_next = Vec::with_capacity(3 * tris.len());
+        self.f_seen = Vec::with_capacity(tris.len());
+        for (f, t) in tris.iter().enumerate() {
+            let p = t.map(|i| self.pts[i as usize]);
+            for (k, &v) in t.iter().enumerate() {
+                let v = v as usize;
+                self.vf_next.push(self.vf_head[v]);
+                self.vf_head[v] = 3 * f as u32 + k as u32;
+                let far = p[(k + 1) % 3]
+                    .distance(p[k])
+                    .max(p[(k + 2) % 3].distance(p[k]));
+                self.v_reach[v] = self.v_reach[v].max(far);
+            }
+            self.f_seen.push(0);
+        }
+        self.tris = tris;
+    }
+
+    /// Closes every loop of at most `max_len` vertices that ear clipping can close whole
+    /// under the bounds of the module doc: new edges at most `max_edge`, or `edge_rel`
+    /// times the loop's longest edge where that is longer (sparse regions, where the
+    /// input's own spacing exceeds R). Returns the number of loops closed.
+    pub fn fill_holes(&mut self, max_edge: f64, edge_rel: f64, max_len: usize) -> u64 {
+        if max_edge <= 0.0 {
+            return 0;
+        }
+        let loops: Vec<Vec<u32>> = self
+            .loops()
+            .into_iter()
+            .filter(|l| l.len() >= 3 && l.len() <= max_len)
+            .collect();
+        if loops.is_empty() {
+            return 0;
+        }
+        self.enable_self_check();
+        let mut closed = 0;
+        for l in loops {
+            // An isolated triangle (a lone seed) must not be doubled.
+            if l.len() == 3 && l.iter().all(|&v| self.adj.degree(v) == 2) {
+                continue;
+            }
+            let k = l.len();
+            let longest = (0..k)
+                .map(|i| self.pts[l[i] as usize].distance(self.pts[l[(i + 1) % k] as usize]))
+                .fold(0.0, f64::max);
+            if let Some(plan) = self.plan_fill(&l, max_edge.max(edge_rel * longest)) {
+                self.apply_fill(&plan);
+                closed += 1;
+            }
+        }
+        closed
+    }
+
+    /// The ears that close loop `l` (front order) whole, best ear first by smallest
+    /// angle, or `None` when some stage has no acceptable ear.
+    fn plan_fill(&mut self, l: &[u32], max_edge: f64) -> Option<Vec<Ear>> {
+        let lim2 = max_edge * max_edge;
+        let mut l = l.to_vec();
+        // Normal of the face on the mesh side of each loop edge l[i] -> l[i + 1].
+        let mut en: Vec<DVec3> = l
+            .iter()
+            .map(|&v| self.e_nrm[self.fout[v as usize] as usize])
+            .collect();
+        let mut plan: Vec<Ear> = Vec::with_capacity(l.len());
+        let mut diagonals: Vec<(u32, u32)> = Vec::new();
+        let mut cands: Vec<(f64, usize)> = Vec::new();
+        while l.len() >= 3 {
+            let k = l.len();
+            cands.clear();
+            for i in 0..k {
+                let (z, a, b) = (l[(i + k - 1) % k], l[i], l[(i + 1) % k]);
+                let (pz, pa, pb) = (
+                    self.pts[z as usize],
+                    self.pts[a as usize],
+                    self.pts[b as usize],
+                );
+                if k > 3 {
+                    if pz.distance_squared(pb) > lim2
+                        || self.adj.has(z, b)
+                        || diagonals.contains(&(z.min(b), z.max(b)))
+                    {
+                        continue;
+                    }
+                }
+                let n = tri_normal(pz, pb, pa);
+                if n == DVec3::ZERO
+                    || n.dot(en[(i + k - 1) % k]) < COS_MAX_FOLD
+                    || n.dot(en[i]) < COS_MAX_FOLD
+                    || (k == 3 && n.dot(en[(i + 1) % k]) < COS_MAX_FOLD)
+                {
+                    continue;
+                }
+                let q = min_angle_cos(pz, pa, pb);
+                if q.is_finite() {
+                    cands.push((q, i));
+                }
+            }
+            cands.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            let mut chosen = None;
+            for &(_, i) in &cands {
+                let (z, a, b) = (l[(i + k - 1) % k], l[i], l[(i + 1) % k]);
+                let tri = [z, b, a];
+                if self.crosses_mesh(tri) || crosses_planned(self.pts, &plan, tri) {
+                    continue;
+                }
+                chosen = Some(i);
+                break;
+            }
+            let i = chosen?;
+            let (z, a, b) = (l[(i + k - 1) % k], l[i], l[(i + 1) % k]);
+            let n = tri_normal(
+                self.pts[z as usize],
+                self.pts[b as usize],
+                self.pts[a as usize],
+            );
+            plan.push(Ear { z, a, b, n });
+            if k == 3 {
+                break;
+            }
+            diagonals.push((z.min(b), z.max(b)));
+            // Edge z -> b replaces z -> a and a -> b; its mesh side is the new ear.
+            en[(i + k - 1) % k] = n;
+            en.remove(i);
+            l.remove(i);
+        }
+        Some(plan)
+    }
+
+    /// Adds the planned ears with the front operations (LINK-next for each ear, FILL for
+    /// the last triangle), so the front stays consistent.
+    fn apply_fill(&mut self, plan: &[Ear]) {
+        let (last, ears) = plan.split_last().expect("a plan has at least one ear");
+        for ear in ears {
+            let g = self.fin[ear.a as usize];
+            self.link_next(g, ear.b, ear.n);
+        }
+        let e = self.fout[last.z as usize];
+        debug_assert_eq!(self.e_b[e as usize], last.a);
+        self.fill(e, last.b);
+    }
+}
+
+/// Whether triangle `tri` crosses a planned ear that shares none of its vertices.
+fn crosses_planned(pts: &[DVec3], plan: &[Ear], tri: [u32; 3]) -> bool {
+    let p = tri.map(|i| pts[i as usize]);
+    plan.iter().any(|e| {
+        let t = [e.z, e.b, e.a];
+        !t.iter().any(|v| tri.contains(v)) && tri_tri_intersect(&p, &t.map(|i| pts[i as usize]))
+    })
+}
+
+/// Cosine of the smallest angle of triangle `(p, q, r)` (NaN when degenerate); smaller
+/// is better.
+pub(crate) fn min_angle_cos(p: DVec3, q: DVec3, r: DVec3) -> f64 {
+    let c = |x: DVec3, y: DVec3, z: DVec3| {
+        let (u, v) = (y - x, z - x);
+        let d = (u.length_squared() * v.length_squared()).sqrt();
+        if d > 0.0 { u.dot(v) / d } else { f64::NAN }
+    };
+    let (a, b, cc) = (c(p, q, r), c(q, r, p), c(r, p, q));
+    if a.is_nan() || b.is_nan() || cc.is_nan() || (q - p).cross(r - p).length_squared() == 0.0 {
+        return f64::NAN;
+    }
+    a.max(b).max(cc)
+}
+
+/// Bounds of a covered point that is inserted.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CoverBound {
+    /// Absolute part of the height bound over the triangle (I12: `free_inside_height`
+    /// rho).
+    pub h_abs: f64,
+    /// Part relative to the triangle's longest edge (I12: `free_inside_rel`).
+    pub h_rel: f64,
+    /// Search radius for the triangles' corners (R).
+    pub radius: f64,
+    /// First search radius for the neighbours whose plane the point must lie on.
+    pub plane_radius: f64,
+    /// Largest height over that plane (`insert_height` rho) ...
+    pub plane_abs: f64,
+    /// ... or this times the neighbours' RMS residual from it, where larger (curved or
+    /// creased neighbourhoods; `insert_rel`).
+    pub plane_rel: f64,
+}
+
+/// Neighbours whose plane a point must lie on (the k of `pf`'s plane fit).
+const PLANE_K: usize = 12;
+
+/// Whether `p` lies on the least-squares plane of its [`PLANE_K`] nearest meshed points
+/// (searched out to 4 `plane_radius`): its height over the plane is at most
+/// max(`plane_abs`, `plane_rel` x their RMS residual). Only meshed points count, so
+/// other outliers nearby do not widen the band. A point on the sampled surface passes
+/// wherever its neighbours do; a point floating above a clean surface does not.
+fn on_local_plane(
+    pts: &[DVec3],
+    state: &[u8],
+    grid: &Grid,
+    p: u32,
+    bound: &CoverBound,
+    nb: &mut Vec<(f64, u32)>,
+) -> bool {
+    let pp = pts[p as usize];
+    let mut r = bound.plane_radius;
+    for _ in 0..3 {
+        nb.clear();
+        grid.for_cells(pp, r, |range| {
+            for v in range {
+                let d = pts[v].distance_squared(pp);
+                if v != p as usize && state[v] == ACCEPTED && d <= r * r {
+                    nb.push((d, v as u32));
+                }
+            }
+        });
+        if nb.len() >= PLANE_K {
+            break;
+        }
+        r *= 2.0;
+    }
+    if nb.len() < 6 {
+        return false;
+    }
+    nb.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let q: Vec<DVec3> = nb
+        .iter()
+        .take(PLANE_K)
+        .map(|&(_, v)| pts[v as usize])
+        .collect();
+    let Ok(cov) = covariance(&q, None) else {
+        return false;
+    };
+    let Ok(eig) = sym_eigen3_smallest(cov.matrix) else {
+        return false;
+    };
+    let rms = eig.values[0].max(0.0).sqrt();
+    let h = (pp - cov.centroid).dot(eig.vector).abs();
+    h <= bound.plane_abs.max(bound.plane_rel * rms)
+}
+
+/// Inserts every point whose `state` is not [`ACCEPTED`] (and that is not flagged in
+/// `skip`: duplicates) into the mesh where it is covered: into the triangle of `tris` it
+/// projects into (split in three), or, where it projects into none (beside a crease),
+/// onto the nearest interior edge it projects onto (its two triangles split in two),
+/// when it lies within the height bound of that triangle or edge. Orientation is kept.
+/// Points are taken in index order (deterministic). Returns the number inserted; their
+/// state becomes [`ACCEPTED`].
+pub(crate) fn insert_covered(
+    pts: &[DVec3],
+    grid: &Grid,
+    tris: &mut Vec<[u32; 3]>,
+    state: &mut [u8],
+    skip: &[bool],
+    bound: CoverBound,
+) -> usize {
+    let n = pts.len();
+    let todo: Vec<u32> = (0..n as u32)
+        .filter(|&i| state[i as usize] != ACCEPTED && !skip[i as usize])
+        .collect();
+    if todo.is_empty() || tris.is_empty() {
+        return 0;
+    }
+    let n0 = tris.len();
+    let vf = VertexFaces::new(n, &tris[..n0]);
+    let mut tree = SplitTree::new(n0);
+    let mut near: Vec<u32> = Vec::new();
+    let mut leaves: Vec<u32> = Vec::new();
+    let mut nb: Vec<(f64, u32)> = Vec::new();
+    let mut inserted = 0;
+    for &p in &todo {
+        let pp = pts[p as usize];
+        if !on_local_plane(pts, state, grid, p, &bound, &mut nb) {
+            continue;
+        }
+        near.clear();
+        let r = bound.radius;
+        grid.for_cells(pp, r, |range| {
+            for v in range {
+                if v < n && state[v] == ACCEPTED && pts[v].distance_squared(pp) <= r * r {
+                    near.push(v as u32);
+                }
+            }
+        });
+        leaves.clear();
+        for &v in &near {
+            for &f in vf.of(v) {
+                tree.leaves_under(f, &mut leaves);
+            }
+        }
+        leaves.sort_unstable();
+        leaves.dedup();
+        if let Some(f) = best_face(pts, tris, &leaves, pp, bound) {
+            let [a, b, c] = tris[f as usize];
+            tree.split(tris, f, &[[a, b, p], [b, c, p], [c, a, p]]);
+        } else if let Some((f, g, u, v)) = best_edge(pts, tris, &leaves, pp, bound) {
+            let w = third(tris[f as usize], u, v);
+            let x = third(tris[g as usize], v, u);
+            tree.split(tris, f, &[[u, p, w], [p, v, w]]);
+            tree.split(tris, g, &[[v, p, x], [p, u, x]]);
+        } else {
+            continue;
+        }
+        state[p as usize] = ACCEPTED;
+        inserted += 1;
+    }
+    if inserted > 0 {
+        // Keep the leaves in order: an original face's place goes to its leaves.
+        let mut out = Vec::with_capacity(tris.len());
+        for f in 0..n0 {
+            tree.leaves_under(f as u32, &mut out);
+        }
+        *tris = out.iter().map(|&f| tris[f as usize]).collect();
+    }
+    inserted
+}
+
+/// The leaf triangle among `leaves` that `p` projects into within the height bound,
+/// the lowest first (ties to the lower id).
+fn best_face(
+    pts: &[DVec3],
+    tris: &[[u32; 3]],
+    leaves: &[u32],
+    p: DVec3,
+    bound: CoverBound,
+) -> Option<u32> {
+    let mut best: Option<(f64, u32)> = None;
+    for &f in leaves {
+        if let Some((h, lmax)) = covers(pts, tris[f as usize], p)
+            && h <= bound.h_abs.max(bound.h_rel * lmax)
+            && best.is_none_or(|(bh, _)| h < bh)
+        {
+            best = Some((h, f));
+        }
+    }
+    best.map(|(_, f)| f)
+}
+
+/// The interior edge `u -> v` of leaf `f` (twin leaf `g` holds `v -> u`) that `p`
+/// projects onto strictly between its ends, nearest to `p` within the height bound.
+fn best_edge(
+    pts: &[DVec3],
+    tris: &[[u32; 3]],
+    leaves: &[u32],
+    p: DVec3,
+    bound: CoverBound,
+) -> Option<(u32, u32, u32, u32)> {
+    let mut best: Option<(f64, u32, u32, u32)> = None;
+    for &f in leaves {
+        let t = tris[f as usize];
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            let (pu, pv) = (pts[u as usize], pts[v as usize]);
+            let e = pv - pu;
+            let ll = e.length_squared();
+            if !(ll > 0.0) {
+                continue;
+            }
+            let s = (p - pu).dot(e) / ll;
+            if !(s > 1e-3 && s < 1.0 - 1e-3) {
+                continue;
+            }
+            let d = p.distance(pu + s * e);
+            if d <= bound.h_abs.max(bound.h_rel * ll.sqrt()) && best.is_none_or(|b| d < b.0) {
+                best = Some((d, f, u, v));
+            }
+        }
+    }
+    let (_, f, u, v) = best?;
+    let g = leaves.iter().copied().find(|&g| {
+        let t = tris[g as usize];
+        (0..3).any(|k| t[k] == v && t[(k + 1) % 3] == u)
+    })?;
+    Some((f, g, u, v))
+}
+
+/// The vertex of triangle `t` other than `u`, `v`.
+fn third(t: [u32; 3], u: u32, v: u32) -> u32 {
+    t.into_iter()
+        .find(|&x| x != u && x != v)
+        .expect("the edge's triangle has a third vertex")
+}
+
+/// Triangles split by inserted points: each original or split triangle keeps the range
+/// of its children, so the current leaves under any original triangle can be found.
+struct SplitTree {
+    /// Per triangle: its first child, `NONE` while it is a leaf.
+    start: Vec<u32>,
+    /// Per triangle: its number of children (2 or 3).
+    count: Vec<u8>,
+}
+
+impl SplitTree {
+    fn new(n: usize) -> Self {
+        Self {
+            start: vec![NONE; n],
+            count: vec![0; n],
+        }
+    }
+
+    /// Replaces leaf `f` by the triangles `kids` (appended to `tris`).
+    fn split(&mut self, tris: &mut Vec<[u32; 3]>, f: u32, kids: &[[u32; 3]]) {
+        self.start[f as usize] = tris.len() as u32;
+        self.count[f as usize] = kids.len() as u8;
+        tris.extend_from_slice(kids);
+        self.start.extend(std::iter::repeat_n(NONE, kids.len()));
+        self.count.extend(std::iter::repeat_n(0, kids.len()));
+    }
+
+    /// Appends the leaves under triangle `f` (depth first, children in order).
+    fn leaves_under(&self, f: u32, out: &mut Vec<u32>) {
+        if self.start[f as usize] == NONE {
+            out.push(f);
+            return;
+        }
+        let (s, c) = (self.start[f as usize], u32::from(self.count[f as usize]));
+        for g in s..s + c {
+            self.leaves_under(g, out);
+        }
+    }
+}
+
+/// When the projection of `p` along the normal of triangle `t` falls strictly inside
+/// it: the distance of `p` from its plane and the triangle's longest edge.
+fn covers(pts: &[DVec3], t: [u32; 3], p: DVec3) -> Option<(f64, f64)> {
+    let [a, b, c] = t.map(|i| pts[i as usize]);
+    let nrm = (b - a).cross(c - a);
+    let nn = nrm.length_squared();
+    if !(nn > 0.0) {
+        return None;
+    }
+    // Signed areas of the sub-triangles with p, along the normal: all positive inside.
+    let inside = [(a, b), (b, c), (c, a)]
+        .iter()
+        .all(|&(u, v)| (v - u).cross(p - u).dot(nrm) > 0.0);
+    if !inside {
+        return None;
+    }
+    let h = (p - a).dot(nrm).abs() / nn.sqrt();
+    let lmax = a
+        .distance_squared(b)
+        .max(b.distance_squared(c))
+        .max(c.distance_squared(a))
+        .sqrt();
+    Some((h, lmax))
+}
+
+/// Faces incident to each vertex, in compressed rows.
+struct VertexFaces {
+    start: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl VertexFaces {
+    fn new(n: usize, tris: &[[u32; 3]]) -> Self {
+        let mut start = vec![0u32; n + 1];
+        for t in tris {
+            for &v in t {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut faces = vec![0u32; 3 * tris.len()];
+        for (f, t) in tris.iter().enumerate() {
+            for &v in t {
+                faces[fill[v as usize] as usize] = f as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Self { start, faces }
+    }
+
+    fn of(&self, v: u32) -> &[u32] {
+        &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
