@@ -7,7 +7,7 @@
 //!
 //! 1. [`Mesher::fill_holes`]: a loop is closed when ear clipping can close it **whole**
 //!    with every new edge at most `max_edge` long, no ear folded against its neighbour
-//!    (more than 120 degrees) and no ear crossing a mesh face or another ear (the exact
+//!    (more than 150 degrees) and no ear crossing a mesh face or another ear (the exact
 //!    test of IMPL-CHOICE I14). Otherwise nothing is added to it. A hole wider than
 //!    `max_edge` (a scan hole, an open end) cannot be closed under that bound and is
 //!    kept, with its rim untouched; a slit between two fronts is zipped.
@@ -15,7 +15,8 @@
 //!    within the I12 height bound of it (the definition of a covered point) and lies on
 //!    the plane of its neighbours (`insert_height`, `insert_rel`: so that outliers near
 //!    the surface stay refused) is inserted there: the triangle is split in three (or,
-//!    beside a crease, its nearest edge is split). The mesh stays interpolating,
+//!    beside a crease, its nearest edge is split), unless a new triangle would cross a
+//!    triangle near it. The mesh stays interpolating,
 //!    manifold and consistently oriented; its topology does not change. Points that are
 //!    above no triangle or farther from it (outliers) stay refused.
 
@@ -27,8 +28,9 @@ use super::grid::{Grid, NONE};
 use super::mesher::{ACCEPTED, Mesher, tri_normal};
 
 /// Cosine of the largest fold allowed between an ear and the face across its old edges
-/// (120 degrees, the paper's alpha_max).
-const COS_MAX_FOLD: f64 = -0.5;
+/// (150 degrees: an acute crease, such as the fandisk's, stays closable; a sheet folded
+/// back onto itself does not).
+const COS_MAX_FOLD: f64 = -0.866;
 
 /// One planned ear: the loop corner it removes (`z -> a -> b`) and its normal.
 #[derive(Clone, Copy)]
@@ -342,12 +344,20 @@ pub(crate) fn insert_covered(
         leaves.dedup();
         if let Some(f) = best_face(pts, tris, &leaves, pp, bound) {
             let [a, b, c] = tris[f as usize];
-            tree.split(tris, f, &[[a, b, p], [b, c, p], [c, a, p]]);
+            let kids = [[a, b, p], [b, c, p], [c, a, p]];
+            if crosses_leaves(pts, tris, &leaves, &kids) {
+                continue;
+            }
+            tree.split(tris, f, &kids);
         } else if let Some((f, g, u, v)) = best_edge(pts, tris, &leaves, pp, bound) {
             let w = third(tris[f as usize], u, v);
             let x = third(tris[g as usize], v, u);
-            tree.split(tris, f, &[[u, p, w], [p, v, w]]);
-            tree.split(tris, g, &[[v, p, x], [p, u, x]]);
+            let kids = [[u, p, w], [p, v, w], [v, p, x], [p, u, x]];
+            if crosses_leaves(pts, tris, &leaves, &kids) {
+                continue;
+            }
+            tree.split(tris, f, &kids[..2]);
+            tree.split(tris, g, &kids[2..]);
         } else {
             continue;
         }
@@ -363,6 +373,18 @@ pub(crate) fn insert_covered(
         *tris = out.iter().map(|&f| tris[f as usize]).collect();
     }
     inserted
+}
+
+/// Whether a new triangle of `kids` would cross a leaf triangle near it that shares
+/// none of its vertices (an inserted point must not make the mesh pass through itself).
+fn crosses_leaves(pts: &[DVec3], tris: &[[u32; 3]], leaves: &[u32], kids: &[[u32; 3]]) -> bool {
+    kids.iter().any(|k| {
+        let q = k.map(|i| pts[i as usize]);
+        leaves.iter().any(|&g| {
+            let t = tris[g as usize];
+            !t.iter().any(|v| k.contains(v)) && tri_tri_intersect(&q, &t.map(|i| pts[i as usize]))
+        })
+    })
 }
 
 /// The leaf triangle among `leaves` that `p` projects into within the height bound,
