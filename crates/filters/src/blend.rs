@@ -35,6 +35,7 @@ use reconbench_geom::method::{
 };
 use reconbench_geom::spatial::{PointIndex, mean_spacing};
 use reconbench_geom::{Channel, PointCloud};
+use reconbench_synth::shapes::blend_shapes::TubePlacement;
 use serde::{Deserialize, Serialize};
 use truck_geometry::prelude::{BSplineSurface, KnotVec, NurbsSurface, Vector4};
 
@@ -88,6 +89,10 @@ pub struct BlendParams {
     /// Tube length inside the part (never sampled; it only has to reach P), fraction of
     /// the diagonal.
     pub depth_rel: f64,
+    /// The box `[min, max]` the placement is relative to; `None` (default): the scan's
+    /// bounding box. Give the part's box (a blend shape's `part_frame`) to place the tube
+    /// exactly where the ground truth has it even when noise grows the scan's box.
+    pub frame: Option<[[f64; 3]; 2]>,
     /// Collar height t in mean spacings (ASSUMPTION W-41: 3).
     pub t_rel: f64,
     /// Collar width w (sphere radius) in mean spacings (ASSUMPTION W-41: 5; must exceed
@@ -119,6 +124,7 @@ impl Default for BlendParams {
             radius_rel: 0.12,
             length_rel: 0.3,
             depth_rel: 0.1,
+            frame: None,
             t_rel: 3.0,
             w_rel: 5.0,
             border_density: 2.0,
@@ -198,6 +204,11 @@ impl Describe for Blend {
             "tube length inside the part (never sampled), fraction of the diagonal",
         ),
         ParamDoc::new(
+            "frame",
+            Unit::None,
+            "box [[min x, y, z], [max x, y, z]] (cloud units) the placement is relative to; default: the scan's bounding box",
+        ),
+        ParamDoc::new(
             "t_rel",
             Unit::Spacing,
             "collar height t (ASSUMPTION W-41: 3 spacings)",
@@ -262,6 +273,20 @@ impl Describe for Blend {
                 format!("must be finite and >= 0, got {}", p.depth_rel),
             );
         }
+        if let Some([lo, hi]) = p.frame {
+            let ok = lo.iter().chain(&hi).all(|x| x.is_finite())
+                && (0..3).all(|i| hi[i] >= lo[i])
+                && (0..3).any(|i| hi[i] > lo[i]);
+            if !ok {
+                return bad(
+                    "frame",
+                    format!(
+                        "must be [[min x, y, z], [max x, y, z]] with finite max >= min and a positive diagonal, got {:?}",
+                        [lo, hi]
+                    ),
+                );
+            }
+        }
         positive("t_rel", p.t_rel)?;
         positive("w_rel", p.w_rel)?;
         if p.w_rel <= p.t_rel {
@@ -307,25 +332,34 @@ pub struct Tube {
     pub axis: DVec3,
     /// Radius.
     pub radius: f64,
-}
-
-/// A unit vector perpendicular to unit `a`.
-fn perpendicular(a: DVec3) -> DVec3 {
-    let helper = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-    a.cross(helper).normalize()
+    /// The placement (shared with the ground-truth blend shapes of `reconbench-synth`).
+    pub placement: TubePlacement,
 }
 
 impl Tube {
-    /// The tube of `p` for a cloud with bounding box `[min, max]`.
+    /// The tube of `p` for a cloud with bounding box `[min, max]` (or `p.frame` when
+    /// given): [`TubePlacement::new`], the rule the blend shapes use.
     pub fn new(p: &BlendParams, min: DVec3, max: DVec3) -> Result<Self, MethodError> {
-        let diag = (max - min).length();
-        let foot = min + DVec3::from_array(p.center_rel) * (max - min);
-        let axis = DVec3::from_array(p.axis).normalize();
-        let radius = p.radius_rel * diag;
-        let outer = foot + axis * (p.length_rel * diag);
-        let inner = foot - axis * (p.depth_rel * diag);
-        let e1 = perpendicular(axis);
-        let e2 = axis.cross(e1);
+        let (min, max) = match p.frame {
+            Some([lo, hi]) => (DVec3::from_array(lo), DVec3::from_array(hi)),
+            None => (min, max),
+        };
+        let pl = TubePlacement::new(
+            p.center_rel,
+            p.axis,
+            p.radius_rel,
+            p.length_rel,
+            p.depth_rel,
+            min,
+            max,
+        )
+        .map_err(|(name, message)| MethodError::InvalidParameter {
+            name: name.into(),
+            message,
+        })?;
+        let (foot, axis, radius) = (pl.foot, pl.axis, pl.radius);
+        let (outer, inner) = (pl.outer_centre(), pl.inner_centre());
+        let (e1, e2) = (pl.e1, pl.e2);
         // seed 002 §2.6: the 7-point circle (degree 2, knots 0,0,0,1/3,1/3,2/3,2/3,1,1,1),
         // control points at angles 0, 60, ..., 360 deg, radius rho (w = 1) and 2 rho
         // (w = 1/2); a degree-1 axis direction (knots 0,0,1,1).
@@ -364,6 +398,7 @@ impl Tube {
             foot,
             axis,
             radius,
+            placement: pl,
         })
     }
 
@@ -381,11 +416,7 @@ impl Tube {
 
     /// Angle around the axis and distance from it.
     pub fn polar(&self, p: DVec3) -> (f64, f64) {
-        let e1 = perpendicular(self.axis);
-        let e2 = self.axis.cross(e1);
-        let q = p - self.foot;
-        let radial = q - self.axis * q.dot(self.axis);
-        (radial.dot(e2).atan2(radial.dot(e1)), radial.length())
+        self.placement.polar(p)
     }
 }
 
