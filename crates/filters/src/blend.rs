@@ -90,7 +90,7 @@ pub struct BlendParams {
     /// the diagonal.
     pub depth_rel: f64,
     /// The box `[min, max]` the placement is relative to; `None` (default): the scan's
-    /// bounding box. Give the part's box (a blend shape's `part_frame`) to place the tube
+    /// bounding box. Give the part's box (a blend shape's scanned part's box) to place the tube
     /// exactly where the ground truth has it even when noise grows the scan's box.
     pub frame: Option<[[f64; 3]; 2]>,
     /// Collar height t in mean spacings (ASSUMPTION W-41: 3).

@@ -10,7 +10,7 @@ use reconbench_geom::method::{
     ORIGIN_COLLAR, ORIGIN_NURBS, ORIGIN_SCAN, RunCtx,
 };
 use reconbench_geom::{Channel, PointCloud, mean_spacing};
-use reconbench_metrics::{BlendOptions, eval_blend};
+use reconbench_metrics::{BlendOptions, eval_blend, eval_blend_truth};
 use reconbench_synth::{Density, Shape, ShapeSpec, sample_or_scan};
 use reconbench_testkit::feature_fixtures::{Truth, grid_box};
 
@@ -310,6 +310,13 @@ fn the_blend_of_a_noiseless_box_tube_lies_near_the_true_union() {
             worst[o] = worst[o].max(shape.distance(*x) / d);
         }
         let [scan, nurbs, collar] = worst;
+        // The metric of the harness rows reports the same distances.
+        let ev = eval_blend_truth(&f.cloud, shape.as_ref(), d, &BlendOptions::default())
+            .unwrap()
+            .unwrap();
+        assert!((ev.collar.max - collar).abs() < 1e-12 && (ev.scan.max - scan).abs() < 1e-12);
+        assert!((ev.nurbs.max - nurbs).abs() < 1e-12);
+        assert_eq!(ev.region_normal.is_some(), rec == Reconstruct::Sharp);
         assert!(scan <= on_surface, "{rec:?}: scan point {scan} spacings off the union");
         assert!(nurbs <= on_surface, "{rec:?}: NURBS point {nurbs} spacings off the union");
         assert!(collar <= chord, "{rec:?}: collar point {collar} > {chord} spacings off");

@@ -409,16 +409,6 @@ impl BlendShape {
         self.tube.scaled(self.s)
     }
 
-    /// The part's bounding box in the normalised frame (the frame the tube is placed in;
-    /// what the `blend` filter's `frame` parameter takes to place its tube exactly here).
-    pub fn part_frame(&self) -> Aabb {
-        let b = self.part.prism.aabb();
-        Aabb {
-            min: b.min * self.s,
-            max: b.max * self.s,
-        }
-    }
-
     /// J at angle `theta` (natural units); the last resort for a numerically missing
     /// hit is the sample.
     fn junction_point(&self, theta: f64) -> DVec3 {
@@ -962,6 +952,41 @@ mod tests {
             );
             let got = s.distance(q);
             assert!((got - exact(q)).abs() < 1e-12, "{q}: {got} vs {}", exact(q));
+        }
+    }
+
+    /// The blend experiments place the filter's tube in the scanned part's box (`frame`),
+    /// written out as numbers: they must be that box.
+    #[test]
+    fn the_frames_of_the_blend_experiments_are_the_scanned_parts_boxes() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../experiments/paper");
+        for file in ["weber_blend.toml", "weber_blend_fandisk.toml"] {
+            let text = std::fs::read_to_string(dir.join(file)).unwrap();
+            let doc: toml::Table = toml::from_str(&text).unwrap();
+            let shape = doc["datasets"].as_array().unwrap()[0]["shape"]
+                .as_str()
+                .unwrap()
+                .to_string();
+            let b = ShapeSpec::named(&shape)
+                .build()
+                .unwrap()
+                .scanned_part()
+                .unwrap()
+                .aabb();
+            let mut checked = 0;
+            for m in doc["methods"].as_array().unwrap() {
+                // `frame = [[min, max]]`: a grid of one value.
+                let f = &m["params"]["frame"].as_array().unwrap()[0];
+                for (k, want) in [(0, b.min), (1, b.max)] {
+                    let v = f.as_array().unwrap()[k].as_array().unwrap();
+                    for i in 0..3 {
+                        let x = v[i].as_float().unwrap();
+                        assert!((x - want[i]).abs() < 1e-15, "{file}: frame {x} vs {}", want[i]);
+                    }
+                }
+                checked += 1;
+            }
+            assert!(checked > 0, "{file}");
         }
     }
 
