@@ -4,7 +4,9 @@
 //! bit-identical across runs and thread counts, and bad parameters are errors.
 
 use glam::DVec3;
-use reconbench_filters::blend::{Blend, BlendParams, Reconstruct, Tube, blend_points};
+use reconbench_filters::blend::{
+    Blend, BlendParams, Patch, Reconstruct, Tube, blend_points, write_patch,
+};
 use reconbench_geom::method::{
     Describe, Diagnostic, FEATURE_CHANNEL, Filter, Filtered, MethodError, ORIGIN_CHANNEL,
     ORIGIN_COLLAR, ORIGIN_NURBS, ORIGIN_SCAN, RunCtx,
@@ -317,9 +319,18 @@ fn the_blend_of_a_noiseless_box_tube_lies_near_the_true_union() {
         assert!((ev.collar.max - collar).abs() < 1e-12 && (ev.scan.max - scan).abs() < 1e-12);
         assert!((ev.nurbs.max - nurbs).abs() < 1e-12);
         assert_eq!(ev.region_normal.is_some(), rec == Reconstruct::Sharp);
-        assert!(scan <= on_surface, "{rec:?}: scan point {scan} spacings off the union");
-        assert!(nurbs <= on_surface, "{rec:?}: NURBS point {nurbs} spacings off the union");
-        assert!(collar <= chord, "{rec:?}: collar point {collar} > {chord} spacings off");
+        assert!(
+            scan <= on_surface,
+            "{rec:?}: scan point {scan} spacings off the union"
+        );
+        assert!(
+            nurbs <= on_surface,
+            "{rec:?}: NURBS point {nurbs} spacings off the union"
+        );
+        assert!(
+            collar <= chord,
+            "{rec:?}: collar point {collar} > {chord} spacings off"
+        );
         // The collar does cut the corner: its farthest point is more than half the bound
         // away (a collar on the union would mean the chart or the test is wrong).
         assert!(collar > 0.5 * chord, "{rec:?}: collar only {collar} off");
@@ -369,4 +380,101 @@ fn the_frame_places_the_tube_of_a_noisy_scan_where_the_truth_has_it() {
         ..BlendParams::default()
     });
     assert!(e.contains("frame"), "{e}");
+}
+
+/// A file in the temporary directory holding `text`, named after the test.
+fn temp_file(name: &str, text: &str) -> String {
+    let path = std::env::temp_dir().join(format!("reconbench-blend-{}-{name}", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+/// `patch = "file"` with a file describing the thesis's tube (written from the tube's
+/// own control net) gives the output of `patch = "tube"`, bit for bit.
+#[test]
+fn a_patch_file_of_the_tube_gives_the_tubes_output() {
+    let (_, c) = cube();
+    let p = params(Reconstruct::Sharp);
+    let bb = c.aabb();
+    let tube = Tube::new(&p, bb.min, bb.max).unwrap();
+    assert!(tube.closed_v);
+    let net = tube.control_net();
+    assert_eq!(net.degrees, [1, 2]);
+    let path = temp_file("tube.txt", &write_patch(&net));
+    let from_file = BlendParams {
+        patch: Patch::File,
+        patch_file: path.clone(),
+        ..params(Reconstruct::Sharp)
+    };
+    let a = run(&c, p, 5);
+    let b = run(&c, from_file, 5);
+    std::fs::remove_file(&path).ok();
+    assert_eq!(a.cloud, b.cloud);
+    assert_eq!(number(&a, "blend_nurbs"), number(&b, "blend_nurbs"));
+}
+
+/// Malformed patch files are errors naming the file and the line at fault.
+#[test]
+fn malformed_patch_files_are_errors_naming_the_line() {
+    let (_, c) = cube();
+    let bb = c.aabb();
+    let tube = Tube::new(&params(Reconstruct::None), bb.min, bb.max).unwrap();
+    let good = write_patch(&tube.control_net());
+    // Line 6 is the first control point: give it a negative weight.
+    let mut negative: Vec<String> = good.lines().map(String::from).collect();
+    let mut words: Vec<&str> = negative[5].split_whitespace().collect();
+    words[3] = "-1";
+    negative[5] = words.join(" ");
+    let negative = negative.join("\n");
+    let cases = [
+        (
+            "knots",
+            good.replace("knots_u 0 0 1 1", "knots_u 0 0 1"),
+            "line 3",
+            "knots_u has 3 knots",
+        ),
+        (
+            "number",
+            good.replace("degrees 1 2", "degrees 1 two"),
+            "line 2",
+            "not a finite number",
+        ),
+        (
+            "order",
+            good.replace("knots_v", "knots_w"),
+            "line 4",
+            "expected 'knots_v",
+        ),
+        ("weight", negative, "line 6", "w > 0"),
+        (
+            "short",
+            good.lines().take(8).collect::<Vec<_>>().join("\n"),
+            "line",
+            "expected 14 control points",
+        ),
+    ];
+    for (name, text, line, what) in cases {
+        let path = temp_file(name, &text);
+        let e = build_err(BlendParams {
+            patch: Patch::File,
+            patch_file: path.clone(),
+            ..BlendParams::default()
+        });
+        std::fs::remove_file(&path).ok();
+        assert!(
+            e.contains(&path) && e.contains(line) && e.contains(what),
+            "{name}: {e}"
+        );
+    }
+    let e = build_err(BlendParams {
+        patch: Patch::File,
+        ..BlendParams::default()
+    });
+    assert!(e.contains("patch_file"), "{e}");
+    let e = build_err(BlendParams {
+        patch: Patch::File,
+        patch_file: "/nonexistent/patch.txt".into(),
+        ..BlendParams::default()
+    });
+    assert!(e.contains("/nonexistent/patch.txt"), "{e}");
 }

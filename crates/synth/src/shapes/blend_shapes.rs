@@ -774,8 +774,7 @@ impl Shape for BlendShape {
             let d = self.closest_capped(p).distance;
             if self.inside_natural(p) { -d } else { d }
         };
-        let (v, f) =
-            crate::polygonize::marching_tetrahedra(&sdf, self.bounds, resolution.max(4));
+        let (v, f) = crate::polygonize::marching_tetrahedra(&sdf, self.bounds, resolution.max(4));
         let mut v: Vec<DVec3> = v
             .into_iter()
             .map(|p| self.closest_capped(p).point)
@@ -858,7 +857,10 @@ fn tube_params(p: &Params, part_box: Aabb) -> Result<TubePlacement> {
 pub(super) fn box_tube(p: &Params) -> Result<Box<dyn Shape>> {
     let h = DVec3::new(p.positive("a")?, p.positive("b")?, p.positive("c")?);
     let part = PrismPatches::new(
-        Region2::new(vec![loops::rect(DVec2::new(-h.x, -h.y), DVec2::new(h.x, h.y))]),
+        Region2::new(vec![loops::rect(
+            DVec2::new(-h.x, -h.y),
+            DVec2::new(h.x, h.y),
+        )]),
         -h.z,
         h.z,
     )
@@ -875,8 +877,8 @@ pub(super) fn box_tube(p: &Params) -> Result<Box<dyn Shape>> {
 pub(super) fn fandisk_tube(p: &Params) -> Result<Box<dyn Shape>> {
     let d = p.positive("depth")?;
     let region = Region2::new(vec![super::fandisk_profile()]);
-    let part = PrismPatches::new(region.clone(), -0.5 * d, 0.5 * d)
-        .map_err(|m| p.error("depth", m))?;
+    let part =
+        PrismPatches::new(region.clone(), -0.5 * d, 0.5 * d).map_err(|m| p.error("depth", m))?;
     let tube = tube_params(p, part.prism.aabb())?;
     let scanned_prism = part.prism.clone();
     let shape = BlendShape::new("fandisk-tube", part, tube, |s| {
@@ -911,7 +913,11 @@ mod tests {
         // Area: box minus the disc plus the wall of height 0.2 part diagonals.
         let h = 0.2 * b.diagonal();
         let want = 6.0 * (b.max.x - b.min.x).powi(2) - std::f64::consts::PI * r * r + TAU * r * h;
-        assert!((s.area() - want).abs() < 1e-12 * want, "{} vs {want}", s.area());
+        assert!(
+            (s.area() - want).abs() < 1e-12 * want,
+            "{} vs {want}",
+            s.area()
+        );
     }
 
     #[test]
@@ -981,7 +987,11 @@ mod tests {
                     let v = f.as_array().unwrap()[k].as_array().unwrap();
                     for i in 0..3 {
                         let x = v[i].as_float().unwrap();
-                        assert!((x - want[i]).abs() < 1e-15, "{file}: frame {x} vs {}", want[i]);
+                        assert!(
+                            (x - want[i]).abs() < 1e-15,
+                            "{file}: frame {x} vs {}",
+                            want[i]
+                        );
                     }
                 }
                 checked += 1;
