@@ -437,7 +437,11 @@ impl BlendShape {
         let (mut a, mut b) = (th0 - h, th0 + h);
         let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
         let (mut fc, mut fd) = (f(c), f(d));
-        while b - a > 1e-15 {
+        // 0.618^75 * 2h < 1e-15: the bracket reaches rounding within the bound.
+        for _ in 0..100 {
+            if b - a <= 1e-15 {
+                break;
+            }
             if fc < fd {
                 b = d;
                 d = c;
