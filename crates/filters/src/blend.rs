@@ -35,6 +35,7 @@ use reconbench_geom::method::{
 };
 use reconbench_geom::spatial::{PointIndex, mean_spacing};
 use reconbench_geom::{Channel, PointCloud};
+use reconbench_synth::shapes::blend_shapes::TubePlacement;
 use serde::{Deserialize, Serialize};
 use truck_geometry::prelude::{BSplineSurface, KnotVec, NurbsSurface, Vector4};
 
@@ -53,6 +54,10 @@ pub enum Patch {
     /// (`u`, 0 at the outer rim), the 7-point degree-2 rational circle around it (`v`).
     #[default]
     Tube,
+    /// A NURBS patch read from `patch_file` ([`read_patch`]; absolute coordinates). The
+    /// tube placement parameters still give the axis the chart channels are measured
+    /// around.
+    File,
 }
 
 /// How the blended set is reconstructed (step 8).
@@ -75,6 +80,8 @@ pub enum Reconstruct {
 pub struct BlendParams {
     /// The patch type.
     pub patch: Patch,
+    /// The patch file of `patch = "file"` ([`read_patch`]).
+    pub patch_file: String,
     /// Where the tube axis meets the part, as fractions of the cloud's bounding box
     /// (`[0.5, 0.5, 1.0]` = centre of the top face).
     pub center_rel: [f64; 3],
@@ -88,6 +95,10 @@ pub struct BlendParams {
     /// Tube length inside the part (never sampled; it only has to reach P), fraction of
     /// the diagonal.
     pub depth_rel: f64,
+    /// The box `[min, max]` the placement is relative to; `None` (default): the scan's
+    /// bounding box. Give the part's box (a blend shape's scanned part's box) to place the tube
+    /// exactly where the ground truth has it even when noise grows the scan's box.
+    pub frame: Option<[[f64; 3]; 2]>,
     /// Collar height t in mean spacings (ASSUMPTION W-41: 3).
     pub t_rel: f64,
     /// Collar width w (sphere radius) in mean spacings (ASSUMPTION W-41: 5; must exceed
@@ -114,11 +125,13 @@ impl Default for BlendParams {
         let m = MlsParams::default();
         Self {
             patch: Patch::Tube,
+            patch_file: String::new(),
             center_rel: [0.5, 0.5, 1.0],
             axis: [0.0, 0.0, 1.0],
             radius_rel: 0.12,
             length_rel: 0.3,
             depth_rel: 0.1,
+            frame: None,
             t_rel: 3.0,
             w_rel: 5.0,
             border_density: 2.0,
@@ -171,7 +184,16 @@ impl Describe for Blend {
     const SUMMARY: &'static str = "blends a NURBS tube into the scan: cut back by collar height t and width w, oversampled-then-thinned collar, sharp MLS of the union";
     type Params = BlendParams;
     const PARAMS: &'static [ParamDoc] = &[
-        ParamDoc::new("patch", Unit::Choice, "designed surface: tube"),
+        ParamDoc::new(
+            "patch",
+            Unit::Choice,
+            "designed surface: tube, or file (a NURBS patch read from patch_file)",
+        ),
+        ParamDoc::new(
+            "patch_file",
+            Unit::Choice,
+            "path of the NURBS patch of patch = \"file\" (text format: docs/methods/blend.md)",
+        ),
         ParamDoc::new(
             "center_rel",
             Unit::Fraction,
@@ -196,6 +218,11 @@ impl Describe for Blend {
             "depth_rel",
             Unit::Fraction,
             "tube length inside the part (never sampled), fraction of the diagonal",
+        ),
+        ParamDoc::new(
+            "frame",
+            Unit::None,
+            "box [[min x, y, z], [max x, y, z]] (cloud units) the placement is relative to; default: the scan's bounding box",
         ),
         ParamDoc::new(
             "t_rel",
@@ -262,6 +289,20 @@ impl Describe for Blend {
                 format!("must be finite and >= 0, got {}", p.depth_rel),
             );
         }
+        if let Some([lo, hi]) = p.frame {
+            let ok = lo.iter().chain(&hi).all(|x| x.is_finite())
+                && (0..3).all(|i| hi[i] >= lo[i])
+                && (0..3).any(|i| hi[i] > lo[i]);
+            if !ok {
+                return bad(
+                    "frame",
+                    format!(
+                        "must be [[min x, y, z], [max x, y, z]] with finite max >= min and a positive diagonal, got {:?}",
+                        [lo, hi]
+                    ),
+                );
+            }
+        }
         positive("t_rel", p.t_rel)?;
         positive("w_rel", p.w_rel)?;
         if p.w_rel <= p.t_rel {
@@ -292,6 +333,15 @@ impl Describe for Blend {
         }
         positive("thin_radius_rel", p.thin_radius_rel)?;
         p.mls().validate()?;
+        match p.patch {
+            Patch::File => {
+                read_patch(&p.patch_file)?;
+            }
+            Patch::Tube if !p.patch_file.is_empty() => {
+                return bad("patch_file", "is only read with patch = \"file\"".into());
+            }
+            Patch::Tube => {}
+        }
         Ok(Self { params })
     }
 }
@@ -307,25 +357,36 @@ pub struct Tube {
     pub axis: DVec3,
     /// Radius.
     pub radius: f64,
-}
-
-/// A unit vector perpendicular to unit `a`.
-fn perpendicular(a: DVec3) -> DVec3 {
-    let helper = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-    a.cross(helper).normalize()
+    /// The placement (shared with the ground-truth blend shapes of `reconbench-synth`).
+    pub placement: TubePlacement,
+    /// Whether the patch is closed in `v` (the start boundary is a loop: the tube).
+    pub closed_v: bool,
 }
 
 impl Tube {
-    /// The tube of `p` for a cloud with bounding box `[min, max]`.
+    /// The tube of `p` for a cloud with bounding box `[min, max]` (or `p.frame` when
+    /// given): [`TubePlacement::new`], the rule the blend shapes use.
     pub fn new(p: &BlendParams, min: DVec3, max: DVec3) -> Result<Self, MethodError> {
-        let diag = (max - min).length();
-        let foot = min + DVec3::from_array(p.center_rel) * (max - min);
-        let axis = DVec3::from_array(p.axis).normalize();
-        let radius = p.radius_rel * diag;
-        let outer = foot + axis * (p.length_rel * diag);
-        let inner = foot - axis * (p.depth_rel * diag);
-        let e1 = perpendicular(axis);
-        let e2 = axis.cross(e1);
+        let (min, max) = match p.frame {
+            Some([lo, hi]) => (DVec3::from_array(lo), DVec3::from_array(hi)),
+            None => (min, max),
+        };
+        let pl = TubePlacement::new(
+            p.center_rel,
+            p.axis,
+            p.radius_rel,
+            p.length_rel,
+            p.depth_rel,
+            min,
+            max,
+        )
+        .map_err(|(name, message)| MethodError::InvalidParameter {
+            name: name.into(),
+            message,
+        })?;
+        let (foot, axis, radius) = (pl.foot, pl.axis, pl.radius);
+        let (outer, inner) = (pl.outer_centre(), pl.inner_centre());
+        let (e1, e2) = (pl.e1, pl.e2);
         // seed 002 §2.6: the 7-point circle (degree 2, knots 0,0,0,1/3,1/3,2/3,2/3,1,1,1),
         // control points at angles 0, 60, ..., 360 deg, radius rho (w = 1) and 2 rho
         // (w = 1/2); a degree-1 axis direction (knots 0,0,1,1).
@@ -357,14 +418,50 @@ impl Tube {
             1.0,
         ]);
         let ku = KnotVec::from(vec![0.0, 0.0, 1.0, 1.0]);
-        let bsp = BSplineSurface::try_new((ku, kv), vec![ring(outer), ring(inner)])
-            .map_err(|e| MethodError::Failed(format!("blend: NURBS tube: {e}")))?;
-        Ok(Self {
-            surface: NurbsSurface::new(bsp),
+        let surface = match p.patch {
+            Patch::Tube => NurbsSurface::new(
+                BSplineSurface::try_new((ku, kv), vec![ring(outer), ring(inner)])
+                    .map_err(|e| MethodError::Failed(format!("blend: NURBS tube: {e}")))?,
+            ),
+            Patch::File => read_patch(&p.patch_file)?,
+        };
+        let mut tube = Self {
+            surface,
             foot,
             axis,
             radius,
-        })
+            placement: pl,
+            closed_v: true,
+        };
+        // Closed in v when the boundaries v = 0 and v = 1 coincide (to 1e-9 of the
+        // patch's size), checked at 9 values of u.
+        let size = (tube.eval(0.0, 0.0) - tube.eval(1.0, 0.5)).length()
+            + (tube.eval(0.0, 0.0) - tube.eval(0.0, 0.5)).length();
+        tube.closed_v = (0..=8).all(|i| {
+            let u = i as f64 / 8.0;
+            (tube.eval(u, 0.0) - tube.eval(u, 1.0)).length() <= 1e-9 * size
+        });
+        Ok(tube)
+    }
+
+    /// The control points (Cartesian) and weights of the patch, `u`-major, with its
+    /// degrees and knot vectors: what [`write_patch`] writes.
+    pub fn control_net(&self) -> PatchNet {
+        let b = self.surface.non_rationalized();
+        let (ku, kv) = b.knot_vecs();
+        let cps = b.control_points();
+        PatchNet {
+            degrees: [b.udegree(), b.vdegree()],
+            knots: [ku.to_vec(), kv.to_vec()],
+            points: cps
+                .iter()
+                .map(|row| {
+                    row.iter()
+                        .map(|q| [q.x / q.w, q.y / q.w, q.z / q.w, q.w])
+                        .collect()
+                })
+                .collect(),
+        }
     }
 
     /// The surface point at `(u, v)`.
@@ -381,12 +478,163 @@ impl Tube {
 
     /// Angle around the axis and distance from it.
     pub fn polar(&self, p: DVec3) -> (f64, f64) {
-        let e1 = perpendicular(self.axis);
-        let e2 = self.axis.cross(e1);
-        let q = p - self.foot;
-        let radial = q - self.axis * q.dot(self.axis);
-        (radial.dot(e2).atan2(radial.dot(e1)), radial.length())
+        self.placement.polar(p)
     }
+}
+
+/// A NURBS patch as its parts: degrees (u, v), knot vectors (u, v), control points
+/// `[x, y, z, weight]` (Cartesian, not multiplied by the weight), `points[i][j]` the
+/// `i`-th along `u` and `j`-th along `v`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PatchNet {
+    /// Degrees in u and v.
+    pub degrees: [usize; 2],
+    /// Knot vectors in u and v.
+    pub knots: [Vec<f64>; 2],
+    /// Control points with their weights.
+    pub points: Vec<Vec<[f64; 4]>>,
+}
+
+/// Writes `net` in the patch file format [`read_patch`] reads.
+pub fn write_patch(net: &PatchNet) -> String {
+    let join = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(" ");
+    let mut out = String::from("# reconbench NURBS patch\n");
+    out += &format!("degrees {} {}\n", net.degrees[0], net.degrees[1]);
+    out += &format!("knots_u {}\n", join(&net.knots[0]));
+    out += &format!("knots_v {}\n", join(&net.knots[1]));
+    let nv = net.points.first().map_or(0, Vec::len);
+    out += &format!("size {} {nv}\n", net.points.len());
+    for row in &net.points {
+        for q in row {
+            out += &format!("{}\n", join(q));
+        }
+    }
+    out
+}
+
+/// Reads a NURBS patch file: text, `#` starts a comment, blank lines ignored; the lines
+/// `degrees DU DV`, `knots_u K...`, `knots_v K...`, `size NU NV` in this order, then
+/// NU x NV lines `x y z w` (u-major: all of v for the first u first; Cartesian
+/// coordinates, weight w > 0). Knot vectors are non-decreasing with `NU + DU + 1` and
+/// `NV + DV + 1` entries and are normalised to [0, 1] by truck-geometry. Errors name the
+/// file and line.
+pub fn read_patch(path: &str) -> Result<NurbsSurface<Vector4>, MethodError> {
+    let bad = |line: usize, m: String| {
+        MethodError::InvalidInput(format!("blend: patch file '{path}', line {line}: {m}"))
+    };
+    if path.is_empty() {
+        return Err(MethodError::InvalidParameter {
+            name: "patch_file".into(),
+            message: "patch = \"file\" needs a patch_file".into(),
+        });
+    }
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| MethodError::InvalidInput(format!("blend: patch file '{path}': {e}")))?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
+        .filter(|(_, l)| !l.is_empty());
+    let mut keyed = |key: &str| -> Result<(usize, Vec<f64>), MethodError> {
+        let Some((n, l)) = lines.next() else {
+            return Err(bad(text.lines().count(), format!("missing '{key}' line")));
+        };
+        let mut it = l.split_whitespace();
+        if it.next() != Some(key) {
+            return Err(bad(n, format!("expected '{key} ...', got '{l}'")));
+        }
+        let v = it
+            .map(|w| {
+                w.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| bad(n, format!("'{w}' is not a finite number")))
+            })
+            .collect::<Result<Vec<f64>, _>>()?;
+        Ok((n, v))
+    };
+    let count = |n: usize, v: &[f64], what: &str| -> Result<[usize; 2], MethodError> {
+        match v {
+            [a, b]
+                if a.fract() == 0.0
+                    && b.fract() == 0.0
+                    && *a >= 1.0
+                    && *b >= 1.0
+                    && *a < 1e6
+                    && *b < 1e6 =>
+            {
+                Ok([*a as usize, *b as usize])
+            }
+            _ => Err(bad(
+                n,
+                format!("{what}: expected two integers >= 1, got {v:?}"),
+            )),
+        }
+    };
+    let (nd, d) = keyed("degrees")?;
+    let degrees = count(nd, &d, "degrees")?;
+    let (nku, ku) = keyed("knots_u")?;
+    let (nkv, kv) = keyed("knots_v")?;
+    let (ns, sz) = keyed("size")?;
+    let size = count(ns, &sz, "size")?;
+    for (n, k, deg, m, name) in [
+        (nku, &ku, degrees[0], size[0], "knots_u"),
+        (nkv, &kv, degrees[1], size[1], "knots_v"),
+    ] {
+        if k.len() != m + deg + 1 {
+            return Err(bad(
+                n,
+                format!(
+                    "{name} has {} knots; {m} control points of degree {deg} need {}",
+                    k.len(),
+                    m + deg + 1
+                ),
+            ));
+        }
+        if k.windows(2).any(|w| w[1] < w[0]) || k[0] == k[k.len() - 1] {
+            return Err(bad(
+                n,
+                format!("{name} must be non-decreasing and not constant"),
+            ));
+        }
+    }
+    let mut rows = Vec::with_capacity(size[0]);
+    for _ in 0..size[0] {
+        let mut row = Vec::with_capacity(size[1]);
+        for _ in 0..size[1] {
+            let Some((n, l)) = lines.next() else {
+                return Err(bad(
+                    text.lines().count(),
+                    format!("expected {} control points", size[0] * size[1]),
+                ));
+            };
+            let v: Vec<f64> = l
+                .split_whitespace()
+                .map(|w| w.parse::<f64>().unwrap_or(f64::NAN))
+                .collect();
+            match v[..] {
+                [x, y, z, w] if [x, y, z, w].iter().all(|c| c.is_finite()) && w > 0.0 => {
+                    row.push(Vector4::new(x * w, y * w, z * w, w));
+                }
+                _ => {
+                    return Err(bad(
+                        n,
+                        format!("expected 'x y z w' (finite, w > 0), got '{l}'"),
+                    ));
+                }
+            }
+        }
+        rows.push(row);
+    }
+    if let Some((n, l)) = lines.next() {
+        return Err(bad(
+            n,
+            format!("unexpected content after the control points: '{l}'"),
+        ));
+    }
+    let b = BSplineSurface::try_new((KnotVec::from(ku), KnotVec::from(kv)), rows)
+        .map_err(|e| bad(ns, format!("not a valid B-spline surface: {e}")))?;
+    Ok(NurbsSurface::new(b))
 }
 
 /// Where every output point of [`blend_points`] came from, and what was built.
@@ -506,10 +754,19 @@ pub fn blend_points(
     let index = PointIndex::new(points)?;
     // Step 1. ASSUMPTION W-45: v-lines at 3-D spacing d along the start boundary, the
     // boundary closed in v (the tube).
+    // A closed patch (the tube) has lines at v = j / m, an open one at v = j / (m - 1)
+    // (both boundaries), and no line pair across v = 1.
     let m = ((start_boundary_length(tube) / d).ceil() as usize).max(3);
+    let v_of = |j: usize| {
+        if tube.closed_v {
+            j as f64 / m as f64
+        } else {
+            j as f64 / (m - 1) as f64
+        }
+    };
     let lines: Vec<Line> = (0..m)
         .into_par_iter()
-        .map(|j| sample_line(tube, &index, j as f64 / m as f64, d, t))
+        .map(|j| sample_line(tube, &index, v_of(j), d, t))
         .collect();
     let open_lines = lines.iter().filter(|l| l.1.is_none()).count();
     let mut nurbs: Vec<DVec3> = lines.iter().flat_map(|l| l.0.iter().copied()).collect();
@@ -518,12 +775,15 @@ pub fn blend_points(
     let mut border: Vec<(DVec3, f64, f64)> = Vec::new();
     for j in 0..m {
         let Some((a, ua)) = lines[j].1 else { continue };
-        let va = j as f64 / m as f64;
+        let va = v_of(j);
         border.push((a, ua, va));
+        if !tube.closed_v && j + 1 == m {
+            break;
+        }
         let jn = (j + 1) % m;
         if let Some((b, ub)) = lines[jn].1 {
             // The last pair closes the loop: v runs on to 1.
-            let vb = if jn == 0 { 1.0 } else { jn as f64 / m as f64 };
+            let vb = if jn == 0 { 1.0 } else { v_of(jn) };
             densify_param(tube, (a, ua, va), (b, ub, vb), gap, 0, &mut border);
         }
     }
@@ -582,11 +842,12 @@ pub fn blend_points(
             beta.push(kept_pts[n.index as usize]);
         }
     }
-    // ASSUMPTION W-47: B densified like A, by straight segments, cyclically.
+    // ASSUMPTION W-47: B densified like A, by straight segments (cyclically for a patch
+    // closed in v).
     let mut scan_border = Vec::with_capacity(beta.len() * 2);
     for (i, &b0) in beta.iter().enumerate() {
         scan_border.push(b0);
-        if beta.len() < 2 {
+        if beta.len() < 2 || (!tube.closed_v && i + 1 == beta.len()) {
             break;
         }
         let b1 = beta[(i + 1) % beta.len()];

@@ -4,13 +4,16 @@
 //! bit-identical across runs and thread counts, and bad parameters are errors.
 
 use glam::DVec3;
-use reconbench_filters::blend::{Blend, BlendParams, Reconstruct, Tube, blend_points};
+use reconbench_filters::blend::{
+    Blend, BlendParams, Patch, Reconstruct, Tube, blend_points, write_patch,
+};
 use reconbench_geom::method::{
     Describe, Diagnostic, FEATURE_CHANNEL, Filter, Filtered, MethodError, ORIGIN_CHANNEL,
     ORIGIN_COLLAR, ORIGIN_NURBS, ORIGIN_SCAN, RunCtx,
 };
 use reconbench_geom::{Channel, PointCloud, mean_spacing};
-use reconbench_metrics::{BlendOptions, eval_blend};
+use reconbench_metrics::{BlendOptions, eval_blend, eval_blend_truth};
+use reconbench_synth::{Density, Shape, ShapeSpec, sample_or_scan};
 use reconbench_testkit::feature_fixtures::{Truth, grid_box};
 
 /// The unit cube on a 24-interval grid (3458 points, spacing 1/24), with exact feature
@@ -259,4 +262,219 @@ fn bad_parameters_and_inputs_are_errors() {
     .unwrap();
     let e = away.filter(&t.cloud(), &mut ctx).unwrap_err().to_string();
     assert!(e.contains("never comes within"), "{e}");
+}
+
+/// The scan of the `box-tube` ground truth: its box sampled on the grid (the union's
+/// scale; 3458 points, 24 intervals per edge), with exact feature labels.
+fn box_tube_scan() -> (Box<dyn Shape>, PointCloud) {
+    let shape = ShapeSpec::named("box-tube").build().unwrap();
+    let g = sample_or_scan(
+        shape.as_ref(),
+        &"grid".parse().unwrap(),
+        Density::Count(3458),
+        None,
+        1,
+    )
+    .unwrap();
+    let mut c = PointCloud::new(g.positions.clone()).unwrap();
+    let lab = g
+        .feature_distance
+        .iter()
+        .map(|&d| i64::from(d < 1e-9))
+        .collect();
+    c.set_channel(FEATURE_CHANNEL, Channel::Label(lab)).unwrap();
+    (shape, c)
+}
+
+/// The blend of a noiseless box+tube scan against the exact union (`box-tube`): the
+/// unprojected set has its scan and NURBS points exactly on the union (the filter and
+/// the shape share the tube's placement) and its collar within the chord bound; after
+/// the sharp reconstruction the scan and NURBS points move by less than h / 4, the collar
+/// stays within the bound, and no hole is wider than 2 spacings.
+///
+/// The bound: a collar segment runs from a border point at height <= t on the wall to a
+/// scan border point at most w + d out on the face, so a point of it is at most
+/// min(lambda (w + d), (1 - lambda) t) <= t (w + d) / (t + w + d) from the union's
+/// concave junction (2 spacings for t = 3, w = 5).
+#[test]
+fn the_blend_of_a_noiseless_box_tube_lies_near_the_true_union() {
+    let (shape, c) = box_tube_scan();
+    let d = mean_spacing(c.positions(), 1).unwrap();
+    let p = params(Reconstruct::None);
+    let chord = p.t_rel * (p.w_rel + 1.0) / (p.t_rel + p.w_rel + 1.0);
+    let h = p.h_rel;
+    for (rec, on_surface) in [(Reconstruct::None, 1e-9), (Reconstruct::Sharp, 0.25 * h)] {
+        let f = run(&c, params(rec), 7);
+        let t = tags(&f);
+        let mut worst = [0.0f64; 3];
+        for (i, x) in f.cloud.positions().iter().enumerate() {
+            let o = t[i] as usize;
+            worst[o] = worst[o].max(shape.distance(*x) / d);
+        }
+        let [scan, nurbs, collar] = worst;
+        // The metric of the harness rows reports the same distances.
+        let ev = eval_blend_truth(&f.cloud, shape.as_ref(), d, &BlendOptions::default())
+            .unwrap()
+            .unwrap();
+        assert!((ev.collar.max - collar).abs() < 1e-12 && (ev.scan.max - scan).abs() < 1e-12);
+        assert!((ev.nurbs.max - nurbs).abs() < 1e-12);
+        assert_eq!(ev.region_normal.is_some(), rec == Reconstruct::Sharp);
+        assert!(
+            scan <= on_surface,
+            "{rec:?}: scan point {scan} spacings off the union"
+        );
+        assert!(
+            nurbs <= on_surface,
+            "{rec:?}: NURBS point {nurbs} spacings off the union"
+        );
+        assert!(
+            collar <= chord,
+            "{rec:?}: collar point {collar} > {chord} spacings off"
+        );
+        // The collar does cut the corner: its farthest point is more than half the bound
+        // away (a collar on the union would mean the chart or the test is wrong).
+        assert!(collar > 0.5 * chord, "{rec:?}: collar only {collar} off");
+        let g = gap(&f.cloud);
+        assert!(g <= 2.0, "{rec:?}: gap {g} spacings");
+    }
+}
+
+/// With noise the scan's bounding box grows and the tube placed in it drifts off the
+/// truth; placed in the part's frame (`frame`) its samples stay exactly on the union.
+#[test]
+fn the_frame_places_the_tube_of_a_noisy_scan_where_the_truth_has_it() {
+    let (shape, c) = box_tube_scan();
+    let d = mean_spacing(c.positions(), 1).unwrap();
+    // Outward noise of 0.5 spacings on every point of the top face's rim region.
+    let moved: Vec<DVec3> = c
+        .positions()
+        .iter()
+        .map(|&p| if p.z > 0.0 { p + DVec3::Z * 0.5 * d } else { p })
+        .collect();
+    let noisy = c.with_positions(moved).unwrap();
+    let b = shape.scanned_part().unwrap().aabb();
+    let nurbs_off = |frame: Option<[[f64; 3]; 2]>| {
+        let f = run(
+            &noisy,
+            BlendParams {
+                frame,
+                ..params(Reconstruct::None)
+            },
+            7,
+        );
+        let t = tags(&f);
+        f.cloud
+            .positions()
+            .iter()
+            .zip(&t)
+            .filter(|(_, o)| **o == ORIGIN_NURBS)
+            .map(|(x, _)| shape.distance(*x) / d)
+            .fold(0.0, f64::max)
+    };
+    let exact = nurbs_off(Some([b.min.to_array(), b.max.to_array()]));
+    let drifted = nurbs_off(None);
+    assert!(exact < 1e-9, "{exact}");
+    assert!(drifted > 1e-3, "{drifted}");
+    let e = build_err(BlendParams {
+        frame: Some([[0.0; 3], [0.0, f64::NAN, 0.0]]),
+        ..BlendParams::default()
+    });
+    assert!(e.contains("frame"), "{e}");
+}
+
+/// A file in the temporary directory holding `text`, named after the test.
+fn temp_file(name: &str, text: &str) -> String {
+    let path = std::env::temp_dir().join(format!("reconbench-blend-{}-{name}", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    path.to_string_lossy().into_owned()
+}
+
+/// `patch = "file"` with a file describing the thesis's tube (written from the tube's
+/// own control net) gives the output of `patch = "tube"`, bit for bit.
+#[test]
+fn a_patch_file_of_the_tube_gives_the_tubes_output() {
+    let (_, c) = cube();
+    let p = params(Reconstruct::Sharp);
+    let bb = c.aabb();
+    let tube = Tube::new(&p, bb.min, bb.max).unwrap();
+    assert!(tube.closed_v);
+    let net = tube.control_net();
+    assert_eq!(net.degrees, [1, 2]);
+    let path = temp_file("tube.txt", &write_patch(&net));
+    let from_file = BlendParams {
+        patch: Patch::File,
+        patch_file: path.clone(),
+        ..params(Reconstruct::Sharp)
+    };
+    let a = run(&c, p, 5);
+    let b = run(&c, from_file, 5);
+    std::fs::remove_file(&path).ok();
+    assert_eq!(a.cloud, b.cloud);
+    assert_eq!(number(&a, "blend_nurbs"), number(&b, "blend_nurbs"));
+}
+
+/// Malformed patch files are errors naming the file and the line at fault.
+#[test]
+fn malformed_patch_files_are_errors_naming_the_line() {
+    let (_, c) = cube();
+    let bb = c.aabb();
+    let tube = Tube::new(&params(Reconstruct::None), bb.min, bb.max).unwrap();
+    let good = write_patch(&tube.control_net());
+    // Line 6 is the first control point: give it a negative weight.
+    let mut negative: Vec<String> = good.lines().map(String::from).collect();
+    let mut words: Vec<&str> = negative[5].split_whitespace().collect();
+    words[3] = "-1";
+    negative[5] = words.join(" ");
+    let negative = negative.join("\n");
+    let cases = [
+        (
+            "knots",
+            good.replace("knots_u 0 0 1 1", "knots_u 0 0 1"),
+            "line 3",
+            "knots_u has 3 knots",
+        ),
+        (
+            "number",
+            good.replace("degrees 1 2", "degrees 1 two"),
+            "line 2",
+            "not a finite number",
+        ),
+        (
+            "order",
+            good.replace("knots_v", "knots_w"),
+            "line 4",
+            "expected 'knots_v",
+        ),
+        ("weight", negative, "line 6", "w > 0"),
+        (
+            "short",
+            good.lines().take(8).collect::<Vec<_>>().join("\n"),
+            "line",
+            "expected 14 control points",
+        ),
+    ];
+    for (name, text, line, what) in cases {
+        let path = temp_file(name, &text);
+        let e = build_err(BlendParams {
+            patch: Patch::File,
+            patch_file: path.clone(),
+            ..BlendParams::default()
+        });
+        std::fs::remove_file(&path).ok();
+        assert!(
+            e.contains(&path) && e.contains(line) && e.contains(what),
+            "{name}: {e}"
+        );
+    }
+    let e = build_err(BlendParams {
+        patch: Patch::File,
+        ..BlendParams::default()
+    });
+    assert!(e.contains("patch_file"), "{e}");
+    let e = build_err(BlendParams {
+        patch: Patch::File,
+        patch_file: "/nonexistent/patch.txt".into(),
+        ..BlendParams::default()
+    });
+    assert!(e.contains("/nonexistent/patch.txt"), "{e}");
 }

@@ -472,6 +472,14 @@ fn projection_metrics(
         reconbench_metrics::eval_blend(output, Some(input.len()), &Default::default())
     {
         row.extend(keep_metrics(ev.to_row()));
+        // Against the true blended surface (a blend shape: part and tube).
+        if let Some(shape) = shape
+            && let Ok(sp) = reconbench_geom::mean_spacing(input, 1)
+            && let Ok(Some(t)) =
+                reconbench_metrics::eval_blend_truth(output, shape, sp, &Default::default())
+        {
+            row.extend(keep_metrics(t.to_row()));
+        }
     }
     row
 }

@@ -298,7 +298,8 @@ pub fn generate(data: &DataSpec, shape: Option<Arc<dyn Shape>>, seed: u64) -> Re
                 seed,
             )
             .map_err(fail)?;
-            (g, shape.aabb())
+            // Noise is relative to what is scanned (a blend shape's part).
+            (g, shape.scanned_part().unwrap_or(shape.as_ref()).aabb())
         }
         None => {
             let f = data

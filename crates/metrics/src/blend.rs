@@ -11,9 +11,11 @@ use reconbench_geom::method::{
     BLEND_CHART_CHANNELS, ORIGIN_CHANNEL, ORIGIN_COLLAR, ORIGIN_NURBS, ORIGIN_SCAN,
 };
 use reconbench_geom::{Channel, PointCloud, PointIndex};
+use reconbench_synth::Shape;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{MetricsError, Result, check_positive};
+use crate::filter_eval::MaxMean;
 use crate::normals::unoriented_angle_deg;
 use crate::report::{Entries, Report, put};
 
@@ -28,6 +30,9 @@ pub struct BlendOptions {
     pub probe_sp: f64,
     /// Neighbours of each collar point whose normals it is compared with.
     pub normal_k: usize,
+    /// Extent of the blend region whose normals are compared with the truth, in
+    /// spacings from the junction (see [`eval_blend_truth`]).
+    pub region_sp: f64,
 }
 
 impl Default for BlendOptions {
@@ -36,6 +41,7 @@ impl Default for BlendOptions {
             band_sp: 8.0,
             probe_sp: 0.25,
             normal_k: 6,
+            region_sp: 4.0,
         }
     }
 }
@@ -307,6 +313,104 @@ impl Report for BlendEval {
             fin(self.collar_normal_var_deg),
         );
         put(&mut e, "blend_gap_sp", fin(self.gap_sp));
+        e
+    }
+}
+
+/// A blended set against the true blended surface (a blend shape such as `box-tube`):
+/// distances per origin, in spacings, and the normal error in the blend region.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BlendTruthEval {
+    /// Distances of the scan points to the truth (spacings).
+    pub scan: MaxMean,
+    /// Distances of the NURBS samples (spacings).
+    pub nurbs: MaxMean,
+    /// Distances of the collar points (spacings).
+    pub collar: MaxMean,
+    /// Unoriented angle (degrees) between the output normal and the true normal at the
+    /// closest point, over the blend region (`None` without normals or chart channels).
+    pub region_normal: Option<MaxMean>,
+}
+
+/// [`BlendTruthEval`] of `cloud` against `truth`, lengths in `spacing` (the input scan's
+/// mean spacing), or `None` when the cloud has no origin tags. The blend region: every
+/// collar point, the NURBS samples at most `region_sp` spacings above the scan (chart
+/// height) and the scan points at most `region_sp` spacings out from the tube wall
+/// (chart offset in `[-0.5, region_sp]`).
+pub fn eval_blend_truth(
+    cloud: &PointCloud,
+    truth: &dyn Shape,
+    spacing: f64,
+    opts: &BlendOptions,
+) -> Result<Option<BlendTruthEval>> {
+    check_positive("spacing", spacing)?;
+    check_positive("region_sp", opts.region_sp)?;
+    let Some(tag) = labels(cloud) else {
+        return Ok(None);
+    };
+    let pos = cloud.positions();
+    let hits: Vec<(f64, DVec3)> = pos
+        .par_iter()
+        .map(|&p| {
+            let c = truth.closest_point(p);
+            (c.distance / spacing, c.normal)
+        })
+        .collect();
+    let of = |o: i64| {
+        let v: Vec<f64> = (0..pos.len())
+            .filter(|&i| tag[i] == o)
+            .map(|i| hits[i].0)
+            .collect();
+        MaxMean::of(&v)
+    };
+    let mut ev = BlendTruthEval {
+        scan: of(ORIGIN_SCAN),
+        nurbs: of(ORIGIN_NURBS),
+        collar: of(ORIGIN_COLLAR),
+        region_normal: None,
+    };
+    let offset = scalar(cloud, BLEND_CHART_CHANNELS[2]);
+    let height = scalar(cloud, BLEND_CHART_CHANNELS[3]);
+    if let (Some(ns), Some(off), Some(hgt)) = (cloud.normals(), offset, height) {
+        let r = opts.region_sp;
+        let angles: Vec<f64> = (0..pos.len())
+            .filter(|&i| match tag[i] {
+                ORIGIN_COLLAR => true,
+                ORIGIN_NURBS => hgt[i] <= r,
+                _ => off[i] >= -0.5 && off[i] <= r,
+            })
+            .filter_map(|i| {
+                (ns[i] != DVec3::ZERO)
+                    .then(|| unoriented_angle_deg(ns[i], hits[i].1))
+                    .flatten()
+            })
+            .collect();
+        ev.region_normal = Some(MaxMean::of(&angles));
+    }
+    Ok(Some(ev))
+}
+
+impl Report for BlendTruthEval {
+    fn entries(&self) -> Entries {
+        let fin = |x: f64| x.is_finite().then_some(x);
+        let mut e = Entries::new();
+        for (name, m) in [
+            ("scan", &self.scan),
+            ("nurbs", &self.nurbs),
+            ("collar", &self.collar),
+        ] {
+            if m.count > 0 {
+                put(&mut e, format!("blend_{name}_dist_max_sp"), m.max);
+                put(&mut e, format!("blend_{name}_dist_mean_sp"), fin(m.mean));
+            }
+        }
+        if let Some(m) = &self.region_normal
+            && m.count > 0
+        {
+            put(&mut e, "blend_region_normal_mean_deg", fin(m.mean));
+            put(&mut e, "blend_region_normal_max_deg", m.max);
+            put(&mut e, "blend_region_points", m.count);
+        }
         e
     }
 }

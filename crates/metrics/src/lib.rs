@@ -9,7 +9,8 @@
 //! * [`filter_eval`]: projecting filters (MLS): distance to the input and to the surface,
 //!   normal error near and away from features, feature-line error (seed 002 Tables 3-6).
 //! * [`blend`]: blended point sets (seed 002 §7): collar uniformity, normal variation,
-//!   largest gap of the blend region, point counts.
+//!   largest gap of the blend region, point counts; against a true blended surface,
+//!   distances per origin and the normal error of the blend region.
 //! * [`topology`]: geom's topology analysis plus Delta F, `topology_ok` and
 //!   self-intersections.
 //! * [`quality`]: triangle angles, aspect ratios, edge lengths.
@@ -39,7 +40,7 @@ pub mod topology;
 
 mod boxtree;
 
-pub use blend::{BlendEval, BlendOptions, eval_blend};
+pub use blend::{BlendEval, BlendOptions, BlendTruthEval, eval_blend, eval_blend_truth};
 pub use cost::{CostReport, cpu_time_seconds, peak_rss_bytes};
 pub use distance::{DistanceEval, DistanceOptions, FScore, Sides, eval_distance};
 pub use error::{MetricsError, Result};

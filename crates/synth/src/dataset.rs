@@ -56,17 +56,22 @@ pub fn generate_for_shape(
     seed: u64,
 ) -> Result<GroundTruthCloud> {
     let mut cloud = sample_or_scan(shape, &spec.sampler, spec.density, spec.scan.as_ref(), seed)?;
+    // Noise is relative to what is scanned (a blend shape's part).
+    let scanned = shape.scanned_part().unwrap_or(shape);
     perturb::apply_all(
         &mut cloud,
         &spec.perturbations,
-        &PerturbContext { aabb: shape.aabb() },
+        &PerturbContext {
+            aabb: scanned.aabb(),
+        },
         seed,
     )?;
     Ok(cloud)
 }
 
 /// The clean cloud of a dataset, before perturbations: a virtual scan when `scan` is
-/// given, else the sampler at the density.
+/// given, else the sampler at the density; of [`Shape::scanned_part`] when the shape has
+/// one (a blend shape's part, without its designed tube).
 pub fn sample_or_scan(
     shape: &dyn Shape,
     sampler: &SamplerSpec,
@@ -74,6 +79,7 @@ pub fn sample_or_scan(
     scan: Option<&ScanSpec>,
     seed: u64,
 ) -> Result<GroundTruthCloud> {
+    let shape = shape.scanned_part().unwrap_or(shape);
     match scan {
         Some(scan) => scanner::scan(shape, scan, seed),
         None => sampler::sample(shape, sampler, density, seed),

@@ -178,6 +178,13 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
         let n = (count as f64).sqrt().round().max(1.0) as usize;
         (n, n)
     }
+    /// What a scanner sees of this shape, when that is not the shape itself: the part of
+    /// a blend shape (`box-tube`, `fandisk-tube`), whose designed tube is added to the
+    /// scan by the `blend` filter. Samplers and the range scanner of a dataset use it;
+    /// the metrics measure against the whole shape. `None` (default): the shape itself.
+    fn scanned_part(&self) -> Option<&dyn Shape> {
+        None
+    }
     /// Listing summary.
     fn info(&self) -> ShapeInfo {
         let curves = self.feature_curves();

@@ -21,6 +21,7 @@ use crate::geom2d::{Elem2, Region2, loops};
 use crate::shape::{FeatureCurve, Sample, Shape, ShapeInfo, SurfacePoint};
 use crate::spec::{fmt_f64, format_kv, parse_f64, parse_kv, resolve_params};
 
+pub mod blend_shapes;
 pub mod blind_hole;
 pub mod boxes;
 pub mod ellipsoid;
@@ -639,6 +640,42 @@ static DEFS: &[ShapeDef] = &[
                 .map_err(|m| p.error("depth", m))?;
             Ok(boxed("fandisk-like", g))
         },
+    },
+    ShapeDef {
+        name: "box-tube",
+        summary: "seed 002 ch. 5 blend truth: box (half-extents a, b, c) with an open tube standing on it, placed like the blend filter's (foot cx, cy, cz of the box; axis ax, ay, az; radius, length out, depth in: fractions of the box diagonal); scans see the box only",
+        params: &[
+            ("a", 1.0),
+            ("b", 1.0),
+            ("c", 1.0),
+            ("cx", 0.5),
+            ("cy", 0.5),
+            ("cz", 1.0),
+            ("ax", 0.0),
+            ("ay", 0.0),
+            ("az", 1.0),
+            ("radius_rel", 0.1),
+            ("length_rel", 0.2),
+            ("depth_rel", 0.1),
+        ],
+        build: blend_shapes::box_tube,
+    },
+    ShapeDef {
+        name: "fandisk-tube",
+        summary: "seed 002 ch. 5 blend truth: the fandisk-like part with an open tube across its edge E and concave cut (placement as box-tube); scans see the part only",
+        params: &[
+            ("depth", 1.0),
+            ("cx", 0.8),
+            ("cy", 0.546),
+            ("cz", 0.5),
+            ("ax", 0.0),
+            ("ay", 1.0),
+            ("az", 0.0),
+            ("radius_rel", 0.05),
+            ("length_rel", 0.15),
+            ("depth_rel", 0.05),
+        ],
+        build: blend_shapes::fandisk_tube,
     },
 ];
 
