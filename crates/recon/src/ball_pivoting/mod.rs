@@ -18,9 +18,11 @@
 //! normals. See `docs/methods/ball_pivoting.md`.
 //!
 //! Files: [`params`], `input` (checks and deduplication, shared with `poisson`),
-//! `geometry` (ball centres, pivot angles), `mesher` (front, seeds, pivoting).
+//! `geometry` (ball centres, pivot contacts), `grid` (neighbour rows), `mesher` (front,
+//! seeds, pivoting).
 
 mod geometry;
+mod grid;
 pub(crate) mod input;
 mod mesher;
 pub mod params;
@@ -30,7 +32,6 @@ use reconbench_geom::method::{
     Describe, Diagnostic, Diagnostics, MethodError, Needs, ParamDoc, Reconstruction, Reconstructor,
     RunCtx,
 };
-use reconbench_geom::spatial::PointIndex;
 use reconbench_geom::{PointCloud, TriMesh};
 
 pub use params::{BallPivotingParams, PARAM_DOCS};
@@ -125,11 +126,9 @@ impl BallPivoting {
                 ),
             });
         }
-        let index = ctx.phase("index", || PointIndex::new(&prep.pos))?;
-        let mut m = Mesher::new(&prep.pos, &prep.nrm, &index);
+        let mut m = Mesher::new(&prep.pos, &prep.nrm);
         let mut per_radius = Vec::with_capacity(radii.len());
         let mut stop: Option<MethodError> = None;
-        let mut pass_err: Option<MethodError> = None;
         let target = 2.0 * prep.pos.len() as f64;
         {
             let _g = ctx.phase_guard("pivot");
@@ -149,10 +148,7 @@ impl BallPivoting {
                 } else {
                     m.active_points()
                 };
-                if let Err(e) = m.begin_pass(rho, &active) {
-                    pass_err = Some(e);
-                    break;
-                }
+                m.begin_pass(rho, &active);
                 let before = m.tris.len();
                 if r > 0 {
                     m.reactivate();
@@ -168,7 +164,7 @@ impl BallPivoting {
                 per_radius.push((m.tris.len() - before) as f64);
             }
         }
-        if let Some(e) = stop.or(pass_err) {
+        if let Some(e) = stop {
             return Err(e);
         }
 
