@@ -56,7 +56,50 @@ impl CellGrid {
     /// Appends to `out` every point of `pos` within distance `sqrt(r2)` of `p` (`r2` at
     /// most the squared cell side), in cell order.
     pub fn near_into(&self, pos: &[DVec3], p: DVec3, r2: f64, out: &mut Vec<u32>) {
-        let c = cell_of(self.origin, self.inv, p);
+        let mut spans = [(0u32, 0u32, [0i64; 3]); 27];
+        let n = self.spans_around(cell_of(self.origin, self.inv, p), &mut spans);
+        self.scan(pos, p, r2, &spans[..n], out);
+    }
+
+    /// The ids of `pos` whose flag in `mark` is set, in cell order (consecutive points
+    /// then share their neighbour cells, which [`Self::rows`] reuses).
+    pub fn in_cell_order(&self, mark: &[bool]) -> Vec<u32> {
+        self.items
+            .iter()
+            .copied()
+            .filter(|&i| mark[i as usize])
+            .collect()
+    }
+
+    /// The rows (as [`Self::near_into`]) of `pts`, appended to `out` with their lengths
+    /// in `lens`. The 27 cell look-ups are done once per run of points in the same cell.
+    pub fn rows(
+        &self,
+        pos: &[DVec3],
+        pts: &[u32],
+        r2: f64,
+        out: &mut Vec<u32>,
+        lens: &mut Vec<u32>,
+    ) {
+        let mut spans = [(0u32, 0u32, [0i64; 3]); 27];
+        let mut n = 0;
+        let mut cur = None;
+        for &i in pts {
+            let p = pos[i as usize];
+            let c = cell_of(self.origin, self.inv, p);
+            if cur != Some(c) {
+                n = self.spans_around(c, &mut spans);
+                cur = Some(c);
+            }
+            let before = out.len();
+            self.scan(pos, p, r2, &spans[..n], out);
+            lens.push((out.len() - before) as u32);
+        }
+    }
+
+    /// The occupied cells among the 27 around cell `c`: `(start, len, cell)`.
+    fn spans_around(&self, c: [i64; 3], spans: &mut [(u32, u32, [i64; 3]); 27]) -> usize {
+        let mut n = 0;
         for dz in -1..=1i64 {
             for dy in -1..=1i64 {
                 for dx in -1..=1i64 {
@@ -65,18 +108,49 @@ impl CellGrid {
                         c[1].saturating_add(dy),
                         c[2].saturating_add(dz),
                     ];
-                    let Some(&(s, l)) = self.cells.get(&k) else {
-                        continue;
-                    };
-                    for &q in &self.items[s as usize..(s + l) as usize] {
-                        if pos[q as usize].distance_squared(p) <= r2 {
-                            out.push(q);
-                        }
+                    if let Some(&(s, l)) = self.cells.get(&k) {
+                        spans[n] = (s, l, k);
+                        n += 1;
                     }
                 }
             }
         }
+        n
     }
+
+    /// Appends the points of the cells in `spans` within `sqrt(r2)` of `p`, skipping the
+    /// cells whose box is farther than that.
+    #[inline]
+    fn scan(
+        &self,
+        pos: &[DVec3],
+        p: DVec3,
+        r2: f64,
+        spans: &[(u32, u32, [i64; 3])],
+        out: &mut Vec<u32>,
+    ) {
+        let side = 1.0 / self.inv;
+        for &(s, l, k) in spans {
+            let lo = self.origin + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * side;
+            let gap = (lo - p).max(p - (lo + side)).max(DVec3::ZERO);
+            // A margin of a few ulps: the box test only skips, never decides.
+            if gap.length_squared() > r2 * (1.0 + 1e-9) {
+                continue;
+            }
+            for &q in &self.items[s as usize..(s + l) as usize] {
+                if pos[q as usize].distance_squared(p) <= r2 {
+                    out.push(q);
+                }
+            }
+        }
+    }
+}
+
+/// The indices of `pos` sorted by grid cell of side `side` (then by index): points
+/// close in space end up close in the order, which keeps the mesher's neighbour reads
+/// in cache.
+pub(crate) fn spatial_order(pos: &[DVec3], side: f64) -> Vec<u32> {
+    CellGrid::new(pos, side).items
 }
 
 /// Integer cell coordinates (the float-to-integer casts saturate, so absurd ratios of
@@ -108,6 +182,22 @@ mod tests {
             row.clear();
             g.near_into(&pos, p, rad * rad, &mut row);
             row.sort_unstable();
+            let brute: Vec<u32> = (0..pos.len() as u32)
+                .filter(|&q| pos[q as usize].distance_squared(p) <= rad * rad)
+                .collect();
+            assert_eq!(row, brute, "point {i}");
+        }
+        // The batched rows in cell order are the same sets.
+        let order = g.in_cell_order(&vec![true; pos.len()]);
+        assert_eq!(order.len(), pos.len());
+        let (mut out, mut lens) = (Vec::new(), Vec::new());
+        g.rows(&pos, &order, rad * rad, &mut out, &mut lens);
+        let mut s = 0;
+        for (&i, &l) in order.iter().zip(&lens) {
+            let mut row = out[s..s + l as usize].to_vec();
+            s += l as usize;
+            row.sort_unstable();
+            let p = pos[i as usize];
             let brute: Vec<u32> = (0..pos.len() as u32)
                 .filter(|&q| pos[q as usize].distance_squared(p) <= rad * rad)
                 .collect();

@@ -68,6 +68,10 @@ pub(crate) struct Counts {
 pub(crate) struct Mesher<'a> {
     pos: &'a [DVec3],
     nrm: &'a [DVec3],
+    /// Rank of each point in the working (input) order: ties and seeds follow it.
+    rank: &'a [u32],
+    /// Point of each rank.
+    by_rank: Vec<u32>,
     /// The grid of `pos` with cells of side `2 * rho` (the current radius).
     grid: Option<CellGrid>,
     /// Per point: its row of neighbours within `2 * rho` for the current radius
@@ -106,14 +110,22 @@ const EMPTY_TOL: f64 = 1e-9;
 const NO_ROW: u32 = u32::MAX;
 
 impl<'a> Mesher<'a> {
-    /// A mesher over `pos` with unit normals `nrm` (zero: unusable point).
-    pub fn new(pos: &'a [DVec3], nrm: &'a [DVec3]) -> Self {
+    /// A mesher over `pos` with unit normals `nrm` (zero: unusable point); `rank` (a
+    /// permutation of `0..n`) is the order that decides ties and the seed search, so the
+    /// mesh does not depend on how `pos` is laid out in memory.
+    pub fn new(pos: &'a [DVec3], nrm: &'a [DVec3], rank: &'a [u32]) -> Self {
         let n = pos.len();
+        let mut by_rank = vec![0u32; n];
+        for (i, &r) in rank.iter().enumerate() {
+            by_rank[r as usize] = i as u32;
+        }
         let mut map = FastMap::default();
         map.reserve(3 * n);
         Self {
             pos,
             nrm,
+            rank,
+            by_rank,
             grid: None,
             nb_row: vec![NO_ROW; n],
             nb_span: Vec::new(),
@@ -142,17 +154,18 @@ impl<'a> Mesher<'a> {
         self.nb_idx.clear();
         let grid = CellGrid::new(self.pos, 2.0 * rho);
         let (pos, r2) = (self.pos, 4.0 * rho * rho);
-        // Rows in chunks (one buffer per chunk, not per point), concatenated in order.
-        let chunks: Vec<(Vec<u32>, Vec<u32>)> = active
+        // In cell order, so that neighbouring rows share their cells (cache and
+        // look-ups); rows in chunks (one buffer per chunk, not per point), in order.
+        let mut mark = vec![false; pos.len()];
+        for &i in active {
+            mark[i as usize] = true;
+        }
+        let order = grid.in_cell_order(&mark);
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = order
             .par_chunks(1024)
             .map(|ch| {
-                let mut idx = Vec::new();
-                let mut lens = Vec::with_capacity(ch.len());
-                for &i in ch {
-                    let before = idx.len();
-                    grid.near_into(pos, pos[i as usize], r2, &mut idx);
-                    lens.push((idx.len() - before) as u32);
-                }
+                let (mut idx, mut lens) = (Vec::new(), Vec::with_capacity(ch.len()));
+                grid.rows(pos, ch, r2, &mut idx, &mut lens);
                 (idx, lens)
             })
             .collect();
@@ -162,7 +175,7 @@ impl<'a> Mesher<'a> {
         for (idx, lens) in chunks {
             let mut s = 0usize;
             for l in lens {
-                let i = active[k];
+                let i = order[k];
                 k += 1;
                 self.nb_row[i as usize] = self.nb_span.len() as u32;
                 self.nb_span.push((self.nb_idx.len() as u32, l));
@@ -361,11 +374,14 @@ impl<'a> Mesher<'a> {
         }
         let mut out = None;
         let mut hit = false;
-        // Contacts in rotation order (ties to the lower index): usually the first one
+        // Contacts in rotation order (ties to the lower rank): usually the first one
         // is taken, so the minimum is selected instead of sorting them all.
-        while let Some(best) = (0..cand.len())
-            .min_by(|&x, &y| cand[x].0.total_cmp(&cand[y].0).then(cand[x].1.cmp(&cand[y].1)))
-        {
+        while let Some(best) = (0..cand.len()).min_by(|&x, &y| {
+            cand[x]
+                .0
+                .total_cmp(&cand[y].0)
+                .then(self.rank[cand[x].1 as usize].cmp(&self.rank[cand[y].1 as usize]))
+        }) {
             let (_, k, c, s) = cand.swap_remove(best);
             let pk = self.pos[k as usize];
             let centre = frame.centre(c, s, rad);
@@ -408,7 +424,7 @@ impl<'a> Mesher<'a> {
     pub fn find_seed(&mut self, cursor: &mut usize) -> bool {
         let n = self.pos.len();
         while *cursor < n {
-            let s = *cursor as u32;
+            let s = self.by_rank[*cursor];
             *cursor += 1;
             if self.used[s as usize] || self.nrm[s as usize] == DVec3::ZERO {
                 continue;
@@ -435,7 +451,8 @@ impl<'a> Mesher<'a> {
                 self.pos[x as usize].distance_squared(ps),
                 self.pos[y as usize].distance_squared(ps),
             );
-            dx.total_cmp(&dy).then(x.cmp(&y))
+            dx.total_cmp(&dy)
+                .then(self.rank[x as usize].cmp(&self.rank[y as usize]))
         });
         let lim = 4.0 * self.rho * self.rho;
         let free = |v: u32| v != s && !self.used[v as usize] && self.nrm[v as usize] != DVec3::ZERO;

@@ -126,7 +126,13 @@ impl BallPivoting {
                 ),
             });
         }
-        let mut m = Mesher::new(&prep.pos, &prep.nrm);
+        // The mesher works on the points in grid-cell order (neighbours close in memory);
+        // every decision that depends on the index order uses the working index
+        // (`perm`), so the mesh is the same as in input order.
+        let perm = grid::spatial_order(&prep.pos, 2.0 * radii[0]);
+        let pos: Vec<_> = perm.iter().map(|&i| prep.pos[i as usize]).collect();
+        let nrm: Vec<_> = perm.iter().map(|&i| prep.nrm[i as usize]).collect();
+        let mut m = Mesher::new(&pos, &nrm, &perm);
         let mut per_radius = Vec::with_capacity(radii.len());
         let mut stop: Option<MethodError> = None;
         let target = 2.0 * prep.pos.len() as f64;
@@ -168,12 +174,16 @@ impl BallPivoting {
             return Err(e);
         }
 
-        let boundary = m.boundary_edges();
+        let boundary: Vec<(u32, u32)> = m
+            .boundary_edges()
+            .into_iter()
+            .map(|(a, b)| (perm[a as usize], perm[b as usize]))
+            .collect();
         let loops = count_loops(prep.pos.len(), &boundary);
         let faces: Vec<[u32; 3]> = m
             .tris
             .iter()
-            .map(|t| t.map(|v| prep.ids[v as usize]))
+            .map(|t| t.map(|v| prep.ids[perm[v as usize] as usize]))
             .collect();
         let mut referenced = vec![false; cloud.len()];
         for f in &faces {

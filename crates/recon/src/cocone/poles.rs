@@ -265,7 +265,11 @@ mod tests {
             let s_max = if k % 5 == 0 { f64::INFINITY } else { 1.0 };
             let s = (22.5f64).to_radians().sin();
             let (lo, hi) = cos_range(a, d, v, s_max);
-            assert_eq!(meets_cocone(a, d, v, s_max, s), lo <= s && hi >= -s, "{a} {d} {v}");
+            assert_eq!(
+                meets_cocone(a, d, v, s_max, s),
+                lo <= s && hi >= -s,
+                "{a} {d} {v}"
+            );
         }
     }
 
