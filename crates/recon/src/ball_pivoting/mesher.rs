@@ -347,7 +347,7 @@ impl<'a> Mesher<'a> {
         };
         let half2 = 0.25 * pa.distance_squared(pb);
         let r2 = self.rho * self.rho - half2;
-        if !(r2 > 0.0) {
+        if r2.is_nan() || r2 <= 0.0 {
             return None;
         }
         let rad = r2.sqrt();
