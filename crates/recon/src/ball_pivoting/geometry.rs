@@ -35,8 +35,9 @@ pub(crate) fn ball_centre(a: DVec3, b: DVec3, c: DVec3, rho: f64) -> Option<DVec
 }
 
 /// Both ball centres of radius `rho` through `a`, `b`, `c`: `(above, below)` the
-/// triangle's normal `(b - a) x (c - a)`.
-#[inline]
+/// triangle's normal `(b - a) x (c - a)` (the reference of [`PivotFrame::contact`]'s
+/// test).
+#[cfg(test)]
 pub(crate) fn ball_centres(a: DVec3, b: DVec3, c: DVec3, rho: f64) -> Option<(DVec3, DVec3)> {
     let (cc, r2) = circumcentre(a, b, c)?;
     let h2 = rho * rho - r2;
@@ -74,25 +75,63 @@ impl PivotFrame {
         })
     }
 
+    /// Where the pivoting sphere first touches `k`: the ball centre moves on the circle
+    /// of radius `rad = (rho² − half2)^½` about `m` (`half2 = |ab|²/4`) in the plane of
+    /// `(e1, e2)`. With `d = k − m`, `d1 = d·e1`, `d2 = d·e2`, `D² = d1² + d2²`, the ball
+    /// passes through `k` where `d1 cos θ + d2 sin θ = q = (|d|² − half2) / (2 rad)`, at
+    /// `(cos θ, sin θ) = (q d1 ∓ h d2, q d2 ± h d1) / D²`, `h = (D² − q²)^½`. Returns the
+    /// pseudo-angle of the first of the two positions reached and its unnormalised
+    /// `(cos, sin)` (length `D²`; see [`Self::centre`]), or `None` when the ball cannot
+    /// touch `k` (too far, or on the edge's line). Replaces a circumcentre and two
+    /// normalisations per candidate.
+    #[inline]
+    pub fn contact(&self, k: DVec3, rad: f64, half2: f64) -> Option<(f64, f64, f64)> {
+        let d = k - self.m;
+        let (d1, d2) = (d.dot(self.e1), d.dot(self.e2));
+        let dd = d1 * d1 + d2 * d2;
+        let q = (d.length_squared() - half2) / (2.0 * rad);
+        let disc = dd - q * q;
+        if !(dd > 0.0 && disc >= 0.0) {
+            return None;
+        }
+        let h = disc.sqrt();
+        let (c1, s1) = (q * d1 - h * d2, q * d2 + h * d1);
+        let (c2, s2) = (q * d1 + h * d2, q * d2 - h * d1);
+        let (t1, t2) = (pseudo_angle(c1, s1), pseudo_angle(c2, s2));
+        Some(if t1 <= t2 { (t1, c1, s1) } else { (t2, c2, s2) })
+    }
+
+    /// The ball centre on the pivot circle of radius `rad` in direction `(c, s)`.
+    #[inline]
+    pub fn centre(&self, c: f64, s: f64, rad: f64) -> DVec3 {
+        self.m + (self.e1 * c + self.e2 * s) * (rad / (c * c + s * s).sqrt())
+    }
+
     /// A monotone stand-in for the rotation angle from the current centre to centre
     /// `x`, in `[0, 4)` (the "diamond angle": `0` at the current centre, `1` a quarter
     /// turn, `2` half a turn); cheaper than `atan2` and enough to order contacts.
-    #[inline]
+    #[cfg(test)]
     pub fn angle(&self, x: DVec3) -> f64 {
         let d = x - self.m;
-        let (c, s) = (d.dot(self.e1), d.dot(self.e2));
-        let (ac, as_) = (c.abs(), s.abs());
-        let sum = ac + as_;
-        if sum == 0.0 {
-            return 0.0;
-        }
-        let t = as_ / sum;
-        match (c >= 0.0, s >= 0.0) {
-            (true, true) => t,
-            (false, true) => 2.0 - t,
-            (false, false) => 2.0 + t,
-            (true, false) => 4.0 - t,
-        }
+        pseudo_angle(d.dot(self.e1), d.dot(self.e2))
+    }
+}
+
+/// The diamond angle of the direction `(c, s)` in `[0, 4)`: monotone in
+/// `atan2(s, c)` taken in `[0, 2π)`, and invariant under positive scaling.
+#[inline]
+pub(crate) fn pseudo_angle(c: f64, s: f64) -> f64 {
+    let (ac, as_) = (c.abs(), s.abs());
+    let sum = ac + as_;
+    if sum == 0.0 {
+        return 0.0;
+    }
+    let t = as_ / sum;
+    match (c >= 0.0, s >= 0.0) {
+        (true, true) => t,
+        (false, true) => 2.0 - t,
+        (false, false) => 2.0 + t,
+        (true, false) => 4.0 - t,
     }
 }
 
@@ -117,6 +156,42 @@ mod tests {
         }
         assert!((x - a).dot((b - a).cross(c - a)) > 0.0);
         assert!(ball_centre(a, b, c, 0.1).is_none());
+    }
+
+    #[test]
+    fn contact_is_the_first_of_the_two_ball_centres() {
+        // Against the circumcentre construction: both centres through (b, a, k), the
+        // one reached first on the pivot circle.
+        let mut x = 0x1234_5678_9abc_def1u64;
+        let mut r = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let (a, b, o) = (DVec3::ZERO, DVec3::X, DVec3::new(0.5, 0.8, 0.0));
+        let rho = 1.2;
+        let f = PivotFrame::new(a, b, ball_centre(a, b, o, rho).unwrap()).unwrap();
+        let half2 = 0.25;
+        let rad = (rho * rho - half2).sqrt();
+        let mut seen = 0;
+        for _ in 0..5000 {
+            let k = DVec3::new(r() * 2.0, r() * 2.0, r() * 2.0);
+            let reference = ball_centres(b, a, k, rho).map(|(up, down)| {
+                let (tu, td) = (f.angle(up), f.angle(down));
+                if tu <= td { (tu, up) } else { (td, down) }
+            });
+            match (f.contact(k, rad, half2), reference) {
+                (Some((t, c, s)), Some((tr, cr))) => {
+                    seen += 1;
+                    assert!((t - tr).abs() < 1e-9, "{k}: {t} {tr}");
+                    assert!(f.centre(c, s, rad).distance(cr) < 1e-9, "{k}");
+                }
+                (None, None) => {}
+                (got, want) => panic!("{k}: {got:?} vs {want:?}"),
+            }
+        }
+        assert!(seen > 1000);
     }
 
     #[test]

@@ -11,10 +11,10 @@
 use std::collections::{HashMap, VecDeque};
 
 use glam::DVec3;
-use reconbench_geom::method::MethodError;
-use reconbench_geom::spatial::PointIndex;
+use rayon::prelude::*;
 
-use super::geometry::{PivotFrame, ball_centre, ball_centres};
+use super::geometry::{PivotFrame, ball_centre};
+use super::grid::CellGrid;
 
 type FastMap = HashMap<u64, u32, foldhash::fast::FixedState>;
 
@@ -68,8 +68,12 @@ pub(crate) struct Counts {
 pub(crate) struct Mesher<'a> {
     pos: &'a [DVec3],
     nrm: &'a [DVec3],
-    /// The spatial index of `pos`.
-    index: &'a PointIndex,
+    /// Rank of each point in the working (input) order: ties and seeds follow it.
+    rank: &'a [u32],
+    /// Point of each rank.
+    by_rank: Vec<u32>,
+    /// The grid of `pos` with cells of side `2 * rho` (the current radius).
+    grid: Option<CellGrid>,
     /// Per point: its row of neighbours within `2 * rho` for the current radius
     /// (`NO_ROW` until first needed), as `(start, len)` into `nb_idx`.
     nb_row: Vec<u32>,
@@ -87,8 +91,9 @@ pub(crate) struct Mesher<'a> {
     /// Diagnostics counts.
     pub counts: Counts,
     rho: f64,
-    /// Reused buffer of (angle, candidate, hit from below, centre).
-    cand: Vec<(f64, u32, bool, DVec3)>,
+    /// Reused buffer of pivot contacts: (angle, candidate, cos, sin) with the ball
+    /// centre at `m + R (cos e1 + sin e2) / (cos² + sin²)^½` on the pivot circle.
+    cand: Vec<(f64, u32, f64, f64)>,
 }
 
 #[inline]
@@ -105,16 +110,23 @@ const EMPTY_TOL: f64 = 1e-9;
 const NO_ROW: u32 = u32::MAX;
 
 impl<'a> Mesher<'a> {
-    /// A mesher over `pos` with unit normals `nrm` (zero: unusable point) and the
-    /// spatial index `index` of `pos`.
-    pub fn new(pos: &'a [DVec3], nrm: &'a [DVec3], index: &'a PointIndex) -> Self {
+    /// A mesher over `pos` with unit normals `nrm` (zero: unusable point); `rank` (a
+    /// permutation of `0..n`) is the order that decides ties and the seed search, so the
+    /// mesh does not depend on how `pos` is laid out in memory.
+    pub fn new(pos: &'a [DVec3], nrm: &'a [DVec3], rank: &'a [u32]) -> Self {
         let n = pos.len();
+        let mut by_rank = vec![0u32; n];
+        for (i, &r) in rank.iter().enumerate() {
+            by_rank[r as usize] = i as u32;
+        }
         let mut map = FastMap::default();
         map.reserve(3 * n);
         Self {
             pos,
             nrm,
-            index,
+            rank,
+            by_rank,
+            grid: None,
             nb_row: vec![NO_ROW; n],
             nb_span: Vec::new(),
             nb_idx: Vec::new(),
@@ -130,29 +142,48 @@ impl<'a> Mesher<'a> {
         }
     }
 
-    /// Sets the ball radius of the next operations and computes, in parallel, the
-    /// neighbour rows of `active` (the points the pass starts from); other points get
-    /// theirs when the front first reaches them. Every ball of radius `rho` touching a
-    /// point lies within `2 rho` of it, so the row holds every candidate.
-    pub fn begin_pass(&mut self, rho: f64, active: &[u32]) -> Result<(), MethodError> {
+    /// Sets the ball radius of the next operations, buckets the points in a grid of
+    /// cells of side `2 rho` and computes, in parallel, the neighbour rows of `active`
+    /// (the points the pass starts from); other points get theirs when the front first
+    /// reaches them. Every ball of radius `rho` touching a point lies within `2 rho` of
+    /// it, so the row holds every candidate.
+    pub fn begin_pass(&mut self, rho: f64, active: &[u32]) {
         self.rho = rho;
         self.nb_row.fill(NO_ROW);
         self.nb_span.clear();
         self.nb_idx.clear();
-        let q: Vec<DVec3> = active.iter().map(|&i| self.pos[i as usize]).collect();
-        let t = self.index.radius_batch(&q, 2.0 * rho)?;
-        self.nb_idx.reserve(t.indices.len());
-        for (r, &i) in active.iter().enumerate() {
-            self.push_row(i, t.indices(r));
+        let grid = CellGrid::new(self.pos, 2.0 * rho);
+        let (pos, r2) = (self.pos, 4.0 * rho * rho);
+        // In cell order, so that neighbouring rows share their cells (cache and
+        // look-ups); rows in chunks (one buffer per chunk, not per point), in order.
+        let mut mark = vec![false; pos.len()];
+        for &i in active {
+            mark[i as usize] = true;
         }
-        Ok(())
-    }
-
-    fn push_row(&mut self, i: u32, row: &[u32]) {
-        self.nb_row[i as usize] = self.nb_span.len() as u32;
-        self.nb_span
-            .push((self.nb_idx.len() as u32, row.len() as u32));
-        self.nb_idx.extend_from_slice(row);
+        let order = grid.in_cell_order(&mark);
+        let chunks: Vec<(Vec<u32>, Vec<u32>)> = order
+            .par_chunks(1024)
+            .map(|ch| {
+                let (mut idx, mut lens) = (Vec::new(), Vec::with_capacity(ch.len()));
+                grid.rows(pos, ch, r2, &mut idx, &mut lens);
+                (idx, lens)
+            })
+            .collect();
+        self.nb_idx
+            .reserve(chunks.iter().map(|c| c.0.len()).sum::<usize>());
+        let mut k = 0;
+        for (idx, lens) in chunks {
+            let mut s = 0usize;
+            for l in lens {
+                let i = order[k];
+                k += 1;
+                self.nb_row[i as usize] = self.nb_span.len() as u32;
+                self.nb_span.push((self.nb_idx.len() as u32, l));
+                self.nb_idx.extend_from_slice(&idx[s..s + l as usize]);
+                s += l as usize;
+            }
+        }
+        self.grid = Some(grid);
     }
 
     /// Computes the neighbour row of `i` if this pass has none yet.
@@ -161,15 +192,18 @@ impl<'a> Mesher<'a> {
         if self.nb_row[i as usize] != NO_ROW {
             return;
         }
-        let row: Vec<u32> = self
-            .index
-            .radius(self.pos[i as usize], 2.0 * self.rho)
-            .map(|v| v.iter().map(|nb| nb.index).collect())
-            .unwrap_or_default();
-        self.push_row(i, &row);
+        let Some(grid) = &self.grid else {
+            return;
+        };
+        let start = self.nb_idx.len();
+        let p = self.pos[i as usize];
+        grid.near_into(self.pos, p, 4.0 * self.rho * self.rho, &mut self.nb_idx);
+        self.nb_row[i as usize] = self.nb_span.len() as u32;
+        self.nb_span
+            .push((start as u32, (self.nb_idx.len() - start) as u32));
     }
 
-    /// Neighbours of `i` within `2 * rho`, sorted by distance (itself first); `i`'s
+    /// Neighbours of `i` within `2 * rho` (itself included), in grid order; `i`'s
     /// row must have been computed ([`Self::ensure`]).
     #[inline]
     fn near(&self, i: u32) -> &[u32] {
@@ -299,17 +333,24 @@ impl<'a> Mesher<'a> {
     }
 
     /// Pivots the ball about front edge `a -> b` of triangle `(a, b, o)`: the first point
-    /// the sphere touches gives the triangle `(b, a, k)` if it is valid.
+    /// the sphere touches ([`PivotFrame::contact`]) gives the triangle `(b, a, k)` if it
+    /// is valid.
     fn pivot(&mut self, e: &Edge) -> Option<(u32, DVec3)> {
         let (a, b, o) = (e.from, e.to, e.opp);
         self.ensure(a);
         let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
         let frame = PivotFrame::new(pa, pb, e.centre)?;
+        let u = (pb - pa).normalize();
         let w = {
             let po = self.pos[o as usize] - frame.m;
-            let u = (pb - pa).normalize();
             po - u * po.dot(u)
         };
+        let half2 = 0.25 * pa.distance_squared(pb);
+        let r2 = self.rho * self.rho - half2;
+        if r2.is_nan() || r2 <= 0.0 {
+            return None;
+        }
+        let rad = r2.sqrt();
         let lim = 4.0 * self.rho * self.rho;
         let mut cand = std::mem::take(&mut self.cand);
         cand.clear();
@@ -321,36 +362,37 @@ impl<'a> Mesher<'a> {
             if pk.distance_squared(pb) > lim {
                 continue;
             }
-            // The sphere touches k at two positions of the pivot circle; the first one
-            // reached is where it enters the ball.
-            let Some((up, down)) = ball_centres(pb, pa, pk, self.rho) else {
+            let Some((t, c, s)) = frame.contact(pk, rad, half2) else {
                 continue;
-            };
-            let (tu, td) = (frame.angle(up), frame.angle(down));
-            let (t, below, c) = if tu <= td {
-                (tu, false, up)
-            } else {
-                (td, true, down)
             };
             // A point co-spherical with the current ball on o's side would fold the
             // new triangle back over the old one.
             if t < 1e-9 && (pk - frame.m).dot(w) > 0.0 {
                 continue;
             }
-            // A hit from below (entering through the wrong side) is kept as a hit: it
-            // stops the ball, and the triangle test below rejects it.
-            cand.push((t, k, below, c));
+            cand.push((t, k, c, s));
         }
-        cand.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
         let mut out = None;
         let mut hit = false;
-        for &(_, k, below, c) in &cand {
+        // Contacts in rotation order (ties to the lower rank): usually the first one
+        // is taken, so the minimum is selected instead of sorting them all.
+        while let Some(best) = (0..cand.len()).min_by(|&x, &y| {
+            cand[x]
+                .0
+                .total_cmp(&cand[y].0)
+                .then(self.rank[cand[x].1 as usize].cmp(&self.rank[cand[y].1 as usize]))
+        }) {
+            let (_, k, c, s) = cand.swap_remove(best);
+            let pk = self.pos[k as usize];
+            let centre = frame.centre(c, s, rad);
             // Numerical safety: the first hit's ball must be empty; otherwise try the next.
-            if !self.empty(a, c, [a, b, k]) {
+            if !self.empty(a, centre, [a, b, k]) {
                 continue;
             }
             hit = true;
-            if below {
+            // A hit from below (the ball entering through the wrong side of (b, a, k)) stops
+            // the ball, and the triangle is rejected.
+            if (centre - pb).dot((pa - pb).cross(pk - pb)) < 0.0 {
                 self.counts.normal_conflict += 1;
                 break;
             }
@@ -367,7 +409,7 @@ impl<'a> Mesher<'a> {
                 self.counts.edge_conflict += 1;
                 break;
             }
-            out = Some((k, c));
+            out = Some((k, centre));
             break;
         }
         if !hit {
@@ -382,7 +424,7 @@ impl<'a> Mesher<'a> {
     pub fn find_seed(&mut self, cursor: &mut usize) -> bool {
         let n = self.pos.len();
         while *cursor < n {
-            let s = *cursor as u32;
+            let s = self.by_rank[*cursor];
             *cursor += 1;
             if self.used[s as usize] || self.nrm[s as usize] == DVec3::ZERO {
                 continue;
@@ -401,8 +443,17 @@ impl<'a> Mesher<'a> {
     /// order, oriented by `s`'s normal, consistent with all three normals, whose
     /// ρ-ball on the normal side is empty.
     fn seed_at(&self, s: u32) -> Option<([u32; 3], DVec3)> {
-        let near = self.near(s);
         let ps = self.pos[s as usize];
+        // Partners in distance order (ties to the lower index).
+        let mut near = self.near(s).to_vec();
+        near.sort_unstable_by(|&x, &y| {
+            let (dx, dy) = (
+                self.pos[x as usize].distance_squared(ps),
+                self.pos[y as usize].distance_squared(ps),
+            );
+            dx.total_cmp(&dy)
+                .then(self.rank[x as usize].cmp(&self.rank[y as usize]))
+        });
         let lim = 4.0 * self.rho * self.rho;
         let free = |v: u32| v != s && !self.used[v as usize] && self.nrm[v as usize] != DVec3::ZERO;
         for (i, &a) in near.iter().enumerate() {

@@ -18,9 +18,11 @@
 //! normals. See `docs/methods/ball_pivoting.md`.
 //!
 //! Files: [`params`], `input` (checks and deduplication, shared with `poisson`),
-//! `geometry` (ball centres, pivot angles), `mesher` (front, seeds, pivoting).
+//! `geometry` (ball centres, pivot contacts), `grid` (neighbour rows), `mesher` (front,
+//! seeds, pivoting).
 
 mod geometry;
+mod grid;
 pub(crate) mod input;
 mod mesher;
 pub mod params;
@@ -30,7 +32,6 @@ use reconbench_geom::method::{
     Describe, Diagnostic, Diagnostics, MethodError, Needs, ParamDoc, Reconstruction, Reconstructor,
     RunCtx,
 };
-use reconbench_geom::spatial::PointIndex;
 use reconbench_geom::{PointCloud, TriMesh};
 
 pub use params::{BallPivotingParams, PARAM_DOCS};
@@ -125,11 +126,15 @@ impl BallPivoting {
                 ),
             });
         }
-        let index = ctx.phase("index", || PointIndex::new(&prep.pos))?;
-        let mut m = Mesher::new(&prep.pos, &prep.nrm, &index);
+        // The mesher works on the points in grid-cell order (neighbours close in memory);
+        // every decision that depends on the index order uses the working index
+        // (`perm`), so the mesh is the same as in input order.
+        let perm = grid::spatial_order(&prep.pos, 2.0 * radii[0]);
+        let pos: Vec<_> = perm.iter().map(|&i| prep.pos[i as usize]).collect();
+        let nrm: Vec<_> = perm.iter().map(|&i| prep.nrm[i as usize]).collect();
+        let mut m = Mesher::new(&pos, &nrm, &perm);
         let mut per_radius = Vec::with_capacity(radii.len());
         let mut stop: Option<MethodError> = None;
-        let mut pass_err: Option<MethodError> = None;
         let target = 2.0 * prep.pos.len() as f64;
         {
             let _g = ctx.phase_guard("pivot");
@@ -149,10 +154,7 @@ impl BallPivoting {
                 } else {
                     m.active_points()
                 };
-                if let Err(e) = m.begin_pass(rho, &active) {
-                    pass_err = Some(e);
-                    break;
-                }
+                m.begin_pass(rho, &active);
                 let before = m.tris.len();
                 if r > 0 {
                     m.reactivate();
@@ -168,16 +170,20 @@ impl BallPivoting {
                 per_radius.push((m.tris.len() - before) as f64);
             }
         }
-        if let Some(e) = stop.or(pass_err) {
+        if let Some(e) = stop {
             return Err(e);
         }
 
-        let boundary = m.boundary_edges();
+        let boundary: Vec<(u32, u32)> = m
+            .boundary_edges()
+            .into_iter()
+            .map(|(a, b)| (perm[a as usize], perm[b as usize]))
+            .collect();
         let loops = count_loops(prep.pos.len(), &boundary);
         let faces: Vec<[u32; 3]> = m
             .tris
             .iter()
-            .map(|t| t.map(|v| prep.ids[v as usize]))
+            .map(|t| t.map(|v| prep.ids[perm[v as usize] as usize]))
             .collect();
         let mut referenced = vec![false; cloud.len()];
         for f in &faces {

@@ -132,6 +132,57 @@ impl<'a> Complex<'a> {
         }
     }
 
+    /// The live triangle other than `j` with the smallest angle about `x→y` from the
+    /// half-plane of `ref_third` (ties to the lower index), as [`Self::angles`] orders
+    /// them. The triangles are ranked by a pseudo-angle (monotone in the angle, no
+    /// `atan2`); the few within `1e-9` of the best are then ranked by the exact angles of
+    /// [`Self::angles`], so the choice is the same as ranking everything by `atan2`.
+    fn next_around(
+        &self,
+        x: u32,
+        y: u32,
+        ref_third: u32,
+        e: u32,
+        j: u32,
+        buf: &mut Vec<(f64, u32)>,
+    ) -> Option<u32> {
+        let p = self.dt.vertices();
+        let (px, u) = (p[x as usize], (p[y as usize] - p[x as usize]).normalize());
+        let perp = |q: DVec3| {
+            let w = q - px;
+            w - w.dot(u) * u
+        };
+        let e1 = perp(p[ref_third as usize]).normalize();
+        let e2 = u.cross(e1);
+        buf.clear();
+        let mut best = f64::INFINITY;
+        for &i in self.around(e) {
+            if i == j || !self.alive[i as usize] {
+                continue;
+            }
+            let w = perp(p[self.third(i, e) as usize]);
+            let a = pseudo_angle(w.dot(e1), w.dot(e2));
+            best = best.min(a);
+            buf.push((a, i));
+        }
+        buf.retain(|&(a, _)| a <= best + 1e-9);
+        if buf.len() == 1 {
+            return Some(buf[0].1);
+        }
+        // Near-ties: the exact angles, as `angles` computes them.
+        for c in buf.iter_mut() {
+            let w = perp(p[self.third(c.1, e) as usize]);
+            let mut a = w.dot(e2).atan2(w.dot(e1));
+            if a < 0.0 {
+                a += std::f64::consts::TAU;
+            }
+            c.0 = a;
+        }
+        buf.iter()
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+            .map(|&(_, i)| i)
+    }
+
     /// Removes sharp triangles until none is left (ACDL §3.1): an edge is sharp when two
     /// consecutive triangles around it leave a gap larger than `sharp` radians, i.e. all
     /// its triangles lie in a wedge narrower than `2π − sharp`; with `dangling`, an edge
@@ -300,14 +351,11 @@ impl<'a> Complex<'a> {
                 for k in 0..3 {
                     let (x, y, z) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
                     let e = self.edge_of(j, x, y);
-                    self.angles(x, y, z, e, &mut buf);
                     // The next triangle turning towards the outer side: the smallest
                     // positive angle about x→y (the normal points that way).
-                    let next = buf
-                        .iter()
-                        .filter(|&&(_, i)| i != j)
-                        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-                    let Some(&(_, i)) = next else { continue };
+                    let Some(i) = self.next_around(x, y, z, e, j, &mut buf) else {
+                        continue;
+                    };
                     if placed[i as usize] {
                         continue;
                     }
@@ -351,6 +399,23 @@ impl<'a> Complex<'a> {
         }
         placed[j as usize] = true;
         true
+    }
+}
+
+/// A monotone stand-in in `[0, 4)` for the angle `atan2(s, c)` taken in `[0, 2π)`
+/// (the "diamond angle": 0 along `+c`, 1 along `+s`, 2 along `−c`).
+fn pseudo_angle(c: f64, s: f64) -> f64 {
+    let (ac, as_) = (c.abs(), s.abs());
+    let sum = ac + as_;
+    if sum == 0.0 {
+        return 0.0;
+    }
+    let t = as_ / sum;
+    match (c >= 0.0, s >= 0.0) {
+        (true, true) => t,
+        (false, true) => 2.0 - t,
+        (false, false) => 2.0 + t,
+        (true, false) => 4.0 - t,
     }
 }
 

@@ -171,9 +171,42 @@ pub fn is_cocone_facet(dt: &Delaunay, poles: &Poles, f: u32, sin_theta: f64) -> 
         if v == DVec3::ZERO {
             return false;
         }
-        let (lo, hi) = cos_range(c0 - pts[p as usize], d, v, s_max);
-        lo <= sin_theta && hi >= -sin_theta
+        meets_cocone(c0 - pts[p as usize], d, v, s_max, sin_theta)
     })
+}
+
+/// Whether `cos_range(a, d, v, s_max)` meets `[-sin_theta, sin_theta]` (`sin_theta > 0`),
+/// from the two end points alone: it does when one of them lies inside the band or the
+/// two lie on opposite sides of it. When both lie on one side, e.g. `cos > sin_theta`,
+/// the segment (or ray) lies in the cone `{y : cos∠(y, v) > sin_theta}`, which is convex
+/// (its half-angle is below π/2), so no interior point reaches the band: the interior
+/// critical point of [`cos_range`] is then a maximum of `|cos|` and cannot change the
+/// answer. The end values are computed as in [`cos_range`].
+#[inline]
+fn meets_cocone(a: DVec3, d: DVec3, v: DVec3, s_max: f64, sin_theta: f64) -> bool {
+    let f = |s: f64| {
+        let y = a + s * d;
+        let l = y.length();
+        if l > 0.0 { y.dot(v) / l } else { 0.0 }
+    };
+    let start = f(0.0);
+    if start.abs() <= sin_theta {
+        return true;
+    }
+    let end = if s_max.is_finite() {
+        f(s_max)
+    } else {
+        let l = d.length();
+        if l > 0.0 { d.dot(v) / l } else { start }
+    };
+    if end.abs() <= sin_theta {
+        return true;
+    }
+    if start.is_finite() && end.is_finite() {
+        return (start > sin_theta) != (end > sin_theta);
+    }
+    let (lo, hi) = cos_range(a, d, v, s_max);
+    lo <= sin_theta && hi >= -sin_theta
 }
 
 /// The cocone flag of every Delaunay facet, in parallel.
@@ -212,6 +245,31 @@ mod tests {
                     "{a} {d}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn early_decision_matches_the_full_range() {
+        // Pseudo-random segments and rays: the short-cut answer equals the range test.
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut r = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for k in 0..20000 {
+            let a = DVec3::new(r(), r(), r());
+            let d = DVec3::new(r(), r(), r()) * 3.0;
+            let v = DVec3::new(r(), r(), r()).normalize();
+            let s_max = if k % 5 == 0 { f64::INFINITY } else { 1.0 };
+            let s = (22.5f64).to_radians().sin();
+            let (lo, hi) = cos_range(a, d, v, s_max);
+            assert_eq!(
+                meets_cocone(a, d, v, s_max, s),
+                lo <= s && hi >= -s,
+                "{a} {d} {v}"
+            );
         }
     }
 

@@ -5,6 +5,7 @@
 //! tetrahedra there is relabelled, so that the two regions no longer touch in an edge or
 //! a point. The output stays the boundary of a union of tetrahedra, so it stays closed.
 
+use rayon::prelude::*;
 use reconbench_delaunay::{Delaunay, INFINITE};
 
 use super::tight::{good_samples, interface};
@@ -187,7 +188,7 @@ pub fn defects(nv: usize, tris: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
             })
         })
         .collect();
-    e.sort_unstable();
+    e.par_sort_unstable();
     let mut bad_edges = Vec::new();
     let mut i = 0;
     while i < e.len() {

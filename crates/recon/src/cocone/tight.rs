@@ -5,6 +5,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+use rayon::prelude::*;
 use reconbench_delaunay::{Delaunay, INFINITE, NO_TET};
 
 use super::poles::{OUT_FACE, Poles, apex};
@@ -52,6 +53,7 @@ pub fn good_samples(nv: usize, surface: &[[u32; 3]]) -> Vec<bool> {
         }
     }
     (0..nv)
+        .into_par_iter()
         .map(|v| {
             let l = &link[off[v] as usize..off[v + 1] as usize];
             if l.len() < 3 {
@@ -144,6 +146,53 @@ fn face_flags(dt: &Delaunay, facets: &[u32]) -> Vec<bool> {
     out
 }
 
+/// What crossing a face into the neighbour does to the label (the two low bits of a
+/// [`face_classes`] entry): a surface triangle flips it.
+const FLIP: u32 = 0;
+/// Crossed freely: no poor vertex, the label is kept.
+const KEEP: u32 = 1;
+/// Near a poor sample: the circumball angle decides.
+const BALL: u32 = 2;
+/// The neighbour is a ghost (always outside): never entered.
+const GHOST: u32 = 3;
+
+/// For every face `4·t + i` (ghosts included), the neighbour across it and the crossing
+/// rule, packed as `neighbour << 2 | rule` (the triangulation keeps tetrahedron ids below
+/// 2^30 for the same packing). Computed in parallel before the sequential walk, so the
+/// walk reads one flat array in place of the tetrahedra, their vertices and the
+/// vertices' good flags.
+fn face_classes(dt: &Delaunay, surface: &[bool], good: &[bool]) -> Vec<u32> {
+    let nt = dt.n_tets();
+    let mut cls = vec![GHOST; 4 * dt.n_all_tets()];
+    cls.par_chunks_mut(4)
+        .enumerate()
+        .with_min_len(4096)
+        .for_each(|(t, c)| {
+            let t = t as u32;
+            for (i, &n) in dt.tet_neighbors(t).iter().enumerate() {
+                if n as usize >= nt {
+                    continue;
+                }
+                // The shared face seen from the finite side (n, face j) when t is a ghost.
+                let (ft, fi) = if (t as usize) < nt {
+                    (t, i)
+                } else {
+                    (n, dt.mirror_face(t, i))
+                };
+                let tv = dt.tet_vertices(ft);
+                let rule = if surface[4 * ft as usize + fi] {
+                    FLIP
+                } else if OUT_FACE[fi].iter().all(|&k| good[tv[k] as usize]) {
+                    KEEP
+                } else {
+                    BALL
+                };
+                c[i] = (n << 2) | rule;
+            }
+        });
+    cls
+}
+
 /// Labels every tetrahedron inside (`true`) or outside; ghosts are outside.
 ///
 /// Crossing a facet from a labelled tetrahedron: a surface triangle flips the label; a
@@ -159,7 +208,7 @@ pub fn label(
 ) -> Vec<bool> {
     let nt = dt.n_tets();
     let nall = dt.n_all_tets();
-    let surface = face_flags(dt, surface_facets);
+    let cls = face_classes(dt, &face_flags(dt, surface_facets), good);
     // 0 unknown, 1 outside, 2 inside.
     let mut label = vec![0u8; nall];
     // The certain crossings (priority above every circumball decision) wait on a stack,
@@ -172,32 +221,31 @@ pub fn label(
                 certain: &mut Vec<(u32, bool)>,
                 heap: &mut BinaryHeap<Item>,
                 stats: &mut MarkStats| {
-        for (i, &n) in dt.tet_neighbors(t).iter().enumerate() {
-            if (n as usize) >= nt || label[n as usize] != 0 {
+        let row = &cls[4 * t as usize..4 * t as usize + 4];
+        for (i, &c) in row.iter().enumerate() {
+            let (n, k) = (c >> 2, c & 3);
+            if k == GHOST || label[n as usize] != 0 {
                 continue;
             }
-            // The shared face seen from the finite side (n, face j) when t is a ghost.
-            let (ft, fi) = if (t as usize) < nt {
-                (t, i)
-            } else {
-                (n, dt.mirror_face(t, i))
-            };
-            if surface[4 * ft as usize + fi] {
-                certain.push((n, !inside));
-                continue;
+            match k {
+                FLIP => certain.push((n, !inside)),
+                KEEP => certain.push((n, inside)),
+                _ => {
+                    debug_assert_eq!(k, BALL);
+                    let (ft, fi) = if (t as usize) < nt {
+                        (t, i)
+                    } else {
+                        (n, dt.mirror_face(t, i))
+                    };
+                    let c = ball_cos(dt, poles, ft, fi);
+                    stats.ball_tests += 1;
+                    heap.push(Item {
+                        prio: c.abs(),
+                        tet: n,
+                        inside: inside != (c < 0.0),
+                    });
+                }
             }
-            let tv = dt.tet_vertices(ft);
-            if OUT_FACE[fi].iter().all(|&k| good[tv[k] as usize]) {
-                certain.push((n, inside));
-                continue;
-            }
-            let c = ball_cos(dt, poles, ft, fi);
-            stats.ball_tests += 1;
-            heap.push(Item {
-                prio: c.abs(),
-                tet: n,
-                inside: inside != (c < 0.0),
-            });
         }
     };
     for l in &mut label[nt..nall] {

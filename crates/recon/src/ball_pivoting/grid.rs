@@ -1,0 +1,207 @@
+//! A hashed uniform grid of the points for one ball radius: cells of side `2ρ`, so every
+//! point within `2ρ` of a point lies in that point's cell or one of the 26 around it.
+//! It gives the neighbour rows of a pass without a tree walk or sorting the results.
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+type CellMap = HashMap<[i64; 3], (u32, u32), foldhash::fast::FixedState>;
+
+/// Points bucketed by cell.
+#[derive(Debug)]
+pub(crate) struct CellGrid {
+    origin: DVec3,
+    inv: f64,
+    /// Cell -> `(start, len)` into `items`.
+    cells: CellMap,
+    /// Point ids sorted by cell, then by id.
+    items: Vec<u32>,
+}
+
+impl CellGrid {
+    /// The grid of `pos` with cells of side `side` (finite, positive).
+    pub fn new(pos: &[DVec3], side: f64) -> Self {
+        let origin = pos
+            .iter()
+            .fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
+        let inv = 1.0 / side;
+        let mut keyed: Vec<([i64; 3], u32)> = pos
+            .par_iter()
+            .enumerate()
+            .map(|(i, &p)| (cell_of(origin, inv, p), i as u32))
+            .collect();
+        keyed.par_sort_unstable();
+        let mut cells = CellMap::default();
+        let mut items = Vec::with_capacity(keyed.len());
+        let mut i = 0;
+        while i < keyed.len() {
+            let k = keyed[i].0;
+            let start = items.len() as u32;
+            while i < keyed.len() && keyed[i].0 == k {
+                items.push(keyed[i].1);
+                i += 1;
+            }
+            cells.insert(k, (start, items.len() as u32 - start));
+        }
+        Self {
+            origin,
+            inv,
+            cells,
+            items,
+        }
+    }
+
+    /// Appends to `out` every point of `pos` within distance `sqrt(r2)` of `p` (`r2` at
+    /// most the squared cell side), in cell order.
+    pub fn near_into(&self, pos: &[DVec3], p: DVec3, r2: f64, out: &mut Vec<u32>) {
+        let mut spans = [(0u32, 0u32, [0i64; 3]); 27];
+        let n = self.spans_around(cell_of(self.origin, self.inv, p), &mut spans);
+        self.scan(pos, p, r2, &spans[..n], out);
+    }
+
+    /// The ids of `pos` whose flag in `mark` is set, in cell order (consecutive points
+    /// then share their neighbour cells, which [`Self::rows`] reuses).
+    pub fn in_cell_order(&self, mark: &[bool]) -> Vec<u32> {
+        self.items
+            .iter()
+            .copied()
+            .filter(|&i| mark[i as usize])
+            .collect()
+    }
+
+    /// The rows (as [`Self::near_into`]) of `pts`, appended to `out` with their lengths
+    /// in `lens`. The 27 cell look-ups are done once per run of points in the same cell.
+    pub fn rows(
+        &self,
+        pos: &[DVec3],
+        pts: &[u32],
+        r2: f64,
+        out: &mut Vec<u32>,
+        lens: &mut Vec<u32>,
+    ) {
+        let mut spans = [(0u32, 0u32, [0i64; 3]); 27];
+        let mut n = 0;
+        let mut cur = None;
+        for &i in pts {
+            let p = pos[i as usize];
+            let c = cell_of(self.origin, self.inv, p);
+            if cur != Some(c) {
+                n = self.spans_around(c, &mut spans);
+                cur = Some(c);
+            }
+            let before = out.len();
+            self.scan(pos, p, r2, &spans[..n], out);
+            lens.push((out.len() - before) as u32);
+        }
+    }
+
+    /// The occupied cells among the 27 around cell `c`: `(start, len, cell)`.
+    fn spans_around(&self, c: [i64; 3], spans: &mut [(u32, u32, [i64; 3]); 27]) -> usize {
+        let mut n = 0;
+        for dz in -1..=1i64 {
+            for dy in -1..=1i64 {
+                for dx in -1..=1i64 {
+                    let k = [
+                        c[0].saturating_add(dx),
+                        c[1].saturating_add(dy),
+                        c[2].saturating_add(dz),
+                    ];
+                    if let Some(&(s, l)) = self.cells.get(&k) {
+                        spans[n] = (s, l, k);
+                        n += 1;
+                    }
+                }
+            }
+        }
+        n
+    }
+
+    /// Appends the points of the cells in `spans` within `sqrt(r2)` of `p`, skipping the
+    /// cells whose box is farther than that.
+    #[inline]
+    fn scan(
+        &self,
+        pos: &[DVec3],
+        p: DVec3,
+        r2: f64,
+        spans: &[(u32, u32, [i64; 3])],
+        out: &mut Vec<u32>,
+    ) {
+        let side = 1.0 / self.inv;
+        for &(s, l, k) in spans {
+            let lo = self.origin + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * side;
+            let gap = (lo - p).max(p - (lo + side)).max(DVec3::ZERO);
+            // A margin of a few ulps: the box test only skips, never decides.
+            if gap.length_squared() > r2 * (1.0 + 1e-9) {
+                continue;
+            }
+            for &q in &self.items[s as usize..(s + l) as usize] {
+                if pos[q as usize].distance_squared(p) <= r2 {
+                    out.push(q);
+                }
+            }
+        }
+    }
+}
+
+/// The indices of `pos` sorted by grid cell of side `side` (then by index): points
+/// close in space end up close in the order, which keeps the mesher's neighbour reads
+/// in cache.
+pub(crate) fn spatial_order(pos: &[DVec3], side: f64) -> Vec<u32> {
+    CellGrid::new(pos, side).items
+}
+
+/// Integer cell coordinates (the float-to-integer casts saturate, so absurd ratios of
+/// extent to cell side lump points together instead of failing; rows stay exact
+/// because every candidate is filtered by distance).
+#[inline]
+fn cell_of(origin: DVec3, inv: f64, p: DVec3) -> [i64; 3] {
+    ((p - origin) * inv).floor().to_array().map(|x| x as i64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_match_brute_force() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut r = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let pos: Vec<DVec3> = (0..2000).map(|_| DVec3::new(r(), r(), r() * 0.1)).collect();
+        let rad = 0.07;
+        let g = CellGrid::new(&pos, rad);
+        let mut row = Vec::new();
+        for (i, &p) in pos.iter().enumerate().step_by(7) {
+            row.clear();
+            g.near_into(&pos, p, rad * rad, &mut row);
+            row.sort_unstable();
+            let brute: Vec<u32> = (0..pos.len() as u32)
+                .filter(|&q| pos[q as usize].distance_squared(p) <= rad * rad)
+                .collect();
+            assert_eq!(row, brute, "point {i}");
+        }
+        // The batched rows in cell order are the same sets.
+        let order = g.in_cell_order(&vec![true; pos.len()]);
+        assert_eq!(order.len(), pos.len());
+        let (mut out, mut lens) = (Vec::new(), Vec::new());
+        g.rows(&pos, &order, rad * rad, &mut out, &mut lens);
+        let mut s = 0;
+        for (&i, &l) in order.iter().zip(&lens) {
+            let mut row = out[s..s + l as usize].to_vec();
+            s += l as usize;
+            row.sort_unstable();
+            let p = pos[i as usize];
+            let brute: Vec<u32> = (0..pos.len() as u32)
+                .filter(|&q| pos[q as usize].distance_squared(p) <= rad * rad)
+                .collect();
+            assert_eq!(row, brute, "point {i}");
+        }
+    }
+}
