@@ -66,7 +66,7 @@ const FILL_MAX_EDGES: usize = 16;
 /// ear clipping, the ear with the largest smallest angle first; a loop stays open when
 /// no ear keeps the mesh edge-manifold and consistently oriented. Returns the triangles
 /// added.
-fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64) -> usize {
+fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -> usize {
     let edges: Vec<(u32, u32)> = boundary_edges(mesh).collect();
     let mut out: foldhash::HashMap<u32, Vec<u32>> = foldhash::HashMap::default();
     for &(a, b) in &edges {
@@ -128,14 +128,14 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64) -> usize {
     for lp in loops {
         let c = lp.iter().map(|&v| p[v as usize]).sum::<DVec3>() / lp.len() as f64;
         if lp.iter().all(|&v| (p[v as usize] - c).length() <= max_radius) {
-            added += clip_ears(mesh, p, lp);
+            added += clip_ears(mesh, p, theta, lp);
         }
     }
     added
 }
 
 /// Ear clipping of one boundary loop (in boundary-edge order); returns the triangles added.
-fn clip_ears(mesh: &mut Mesh, p: &[DVec3], mut lp: Vec<u32>) -> usize {
+fn clip_ears(mesh: &mut Mesh, p: &[DVec3], theta: f64, mut lp: Vec<u32>) -> usize {
     let mut added = 0;
     while lp.len() >= 3 {
         let m = lp.len();
@@ -144,6 +144,31 @@ fn clip_ears(mesh: &mut Mesh, p: &[DVec3], mut lp: Vec<u32>) -> usize {
             let (v0, v1, v2) = (lp[i], lp[(i + 1) % m], lp[(i + 2) % m]);
             let t = [v1, v0, v2];
             if !mesh.can_add(t) {
+                continue;
+            }
+            // An ear: no fold against the triangles on its two loop edges, no other loop
+            // vertex inside it.
+            let n_t = cross(p, t);
+            let folds = [(v0, v1), (v1, v2)].iter().any(|&(a, b)| {
+                let f = mesh.edge_tris(a, b)[0];
+                f != NONE && angle(n_t, cross(p, mesh.tris[f as usize])) >= theta
+            });
+            if folds || n_t.length_squared() == 0.0 {
+                continue;
+            }
+            let nu = n_t.normalize();
+            let inside = lp.iter().any(|&q| {
+                if q == v0 || q == v1 || q == v2 {
+                    return false;
+                }
+                let x = p[q as usize];
+                let side = |a: u32, b: u32| {
+                    let (pa, pb) = (p[a as usize], p[b as usize]);
+                    (pb - pa).cross(x - pa).dot(nu) > 0.0
+                };
+                side(v1, v0) && side(v0, v2) && side(v2, v1)
+            });
+            if inside {
                 continue;
             }
             let q = min_angle(p[v0 as usize], p[v1 as usize], p[v2 as usize]);
@@ -210,7 +235,7 @@ pub fn zip<'b>(
                 }
             }
         }
-        let f = fill_small_loops(&mut mesh, p, o.max_radius);
+        let f = fill_small_loops(&mut mesh, p, o.max_radius, o.theta);
         stats.filled += f;
         if added + f == 0 {
             break;
@@ -281,8 +306,8 @@ impl Rounds {
     }
 }
 
-/// Builds the mesh of `tris` without its folded triangles and without overlaps: first
-/// the triangles whose normal is at `theta` or more from the normals of more of the
+/// Builds the mesh of `tris` without its folded triangles and its overlaps: first the
+/// triangles whose normal is at `theta` or more from the normals of more of the
 /// triangles across their edges than it agrees with are left out (repeated, so strips
 /// go too), such as the fold a split leaves when P lies outside the winner triangle in
 /// its plane; then, in the sweep's order, every
@@ -300,8 +325,8 @@ fn unfold<'b>(
         let added = full.add(t);
         debug_assert!(added.is_some(), "sweep triangle {t:?} re-added");
     }
-    // Majority vote, repeated so that strips of folded triangles go too.
     let mut keep = vec![true; tris.len()];
+    // Majority vote, repeated so that strips of folded triangles go too.
     for _ in 0..UNFOLD_PASSES {
         let fold: Vec<usize> = (0..tris.len())
             .filter(|&id| keep[id])
@@ -440,7 +465,6 @@ fn close_edge<'b>(
             buf.clear();
             mesh.boundary_at(c, buf);
             if buf.is_empty() {
-                dbg_count(1);
                 continue;
             }
             if !bowtie && !mesh.has_edge(a, c) && !mesh.has_edge(c, b) {
@@ -450,9 +474,6 @@ fn close_edge<'b>(
         cands.push((angle(pa - pc, pb - pc), c));
     }
     cands.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
-    if cands.is_empty() {
-        dbg_count(0);
-    }
     for &(_, c) in cands.iter().take(TRIES) {
         if try_triangle(mesh, p, nbrs, o, [b, a, c], n_w) {
             return Some(c);
@@ -474,27 +495,22 @@ fn try_triangle<'b>(
     let [b, a, c] = t;
     let (pa, pb, pc) = (p[a as usize], p[b as usize], p[c as usize]);
     if !mesh.can_add(t) {
-        dbg_count(2);
         return false;
     }
     if min_angle(pa, pb, pc) <= 1f64.to_radians() {
-        dbg_count(3);
         return false;
     }
     if circumradius(pa, pb, pc) > o.max_radius {
-        dbg_count(4);
         return false;
     }
     let n_t = cross(p, t);
     if angle(n_t, n_w) >= o.theta {
-        dbg_count(5);
         return false;
     }
     // The fold test against every triangle the new one closes against.
     for (u, v) in [(a, c), (c, b)] {
         let [t0, _] = mesh.edge_tris(u, v);
         if t0 != NONE && angle(n_t, cross(p, mesh.tris[t0 as usize])) >= o.theta {
-            dbg_count(6);
             return false;
         }
     }
@@ -510,18 +526,10 @@ fn try_triangle<'b>(
         .iter()
         .any(|&q| q != b && q != c && inside(p[q as usize]))
     {
-        dbg_count(7);
         return false;
     }
     if overlaps(mesh, p, t, nbrs(a)) {
-        dbg_count(7);
         return false;
     }
     mesh.add(t).is_some()
-}
-
-/// Debug counters.
-pub static DBG: [std::sync::atomic::AtomicUsize; 8] = [const { std::sync::atomic::AtomicUsize::new(0) }; 8];
-fn dbg_count(k: usize) {
-    DBG[k].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
 }
