@@ -417,7 +417,11 @@ fn scan_like_standins_are_meshed_in_one_piece_with_their_holes_open() {
     for (name, n) in [("bolt-plate", 6642), ("eye-face", 17_992)] {
         let (s, pts) = standin_grid(name, n);
         assert_eq!(s.boundary_loops(), 3);
-        assert!(pts.len().abs_diff(n) < n / 20, "{name}: {} points", pts.len());
+        assert!(
+            pts.len().abs_diff(n) < n / 20,
+            "{name}: {} points",
+            pts.len()
+        );
         let lr = run(&pts, literal(2.0));
         let lit = analyze(&lr.mesh);
         let r = run(&pts, with_rho(2.0));

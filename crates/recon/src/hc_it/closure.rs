@@ -103,15 +103,18 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
                 if free.len() == 1 {
                     return Some(free[0]);
                 }
-                free.into_iter()
-                    .min_by(|&x, &y| {
-                        let ccw = |w: u32| {
-                            let d = p[w as usize] - p[v as usize];
-                            let a = back.cross(d).dot(n).atan2(back.dot(d));
-                            if a <= 0.0 { a + std::f64::consts::TAU } else { a }
-                        };
-                        ccw(x).total_cmp(&ccw(y)).then(x.cmp(&y))
-                    })
+                free.into_iter().min_by(|&x, &y| {
+                    let ccw = |w: u32| {
+                        let d = p[w as usize] - p[v as usize];
+                        let a = back.cross(d).dot(n).atan2(back.dot(d));
+                        if a <= 0.0 {
+                            a + std::f64::consts::TAU
+                        } else {
+                            a
+                        }
+                    };
+                    ccw(x).total_cmp(&ccw(y)).then(x.cmp(&y))
+                })
             });
             let Some(w) = next else {
                 break false;
@@ -127,7 +130,10 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
     let mut added = 0;
     for lp in loops {
         let c = lp.iter().map(|&v| p[v as usize]).sum::<DVec3>() / lp.len() as f64;
-        if lp.iter().all(|&v| (p[v as usize] - c).length() <= max_radius) {
+        if lp
+            .iter()
+            .all(|&v| (p[v as usize] - c).length() <= max_radius)
+        {
             added += clip_ears(mesh, p, theta, lp);
         }
     }
@@ -366,6 +372,12 @@ fn unfold<'b>(
     (mesh, dropped)
 }
 
+/// Bounding box of a triangle.
+fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
+    let [a, b, c] = t.map(|v| p[v as usize]);
+    (a.min(b).min(c), a.max(b).max(c))
+}
+
 /// Whether triangle `t` overlaps a triangle of `mesh` at its vertices or at the points
 /// `near` (those whose centroid is within t's longest edge of t's plane): seen along t's
 /// normal, an edge of one crosses an edge of the other, or a vertex of one lies inside
@@ -390,12 +402,23 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
             let (pa, pb) = (p[a as usize], p[b as usize]);
             (pb - pa).cross(x - pa).dot(nu)
         };
-        let s = [side(tri[0], tri[1]), side(tri[1], tri[2]), side(tri[2], tri[0])];
+        let s = [
+            side(tri[0], tri[1]),
+            side(tri[1], tri[2]),
+            side(tri[2], tri[0]),
+        ];
         (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
     };
+    // Only triangles whose box meets t's box grown by `reach` can overlap it.
+    let (lo, hi) = bbox(p, t);
+    let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
     for &x in t.iter().chain(near) {
         for &f in &mesh.vt[x as usize] {
             let o = mesh.tris[f as usize];
+            let (olo, ohi) = bbox(p, o);
+            if olo.cmpgt(hi).any() || ohi.cmplt(lo).any() {
+                continue;
+            }
             let oc = (p[o[0] as usize] + p[o[1] as usize] + p[o[2] as usize]) / 3.0;
             if (oc - p0).dot(nu).abs() > reach {
                 continue;
@@ -407,7 +430,13 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
                     if r == u || r == v || s == u || s == v {
                         continue;
                     }
-                    if crosses(nu, p[u as usize], p[v as usize], p[r as usize], p[s as usize]) {
+                    if crosses(
+                        nu,
+                        p[u as usize],
+                        p[v as usize],
+                        p[r as usize],
+                        p[s as usize],
+                    ) {
                         return true;
                     }
                 }

@@ -256,13 +256,10 @@ impl Reconstructor for HcIt {
                         // Deviation (docs/methods/hc_it.md, "Closure pass"): per run, so
                         // portions stay separate (H15).
                         let tris = std::mem::take(&mut o.tris);
-                        let (tris, z) = closure::zip(
-                            &sorted,
-                            tris,
-                            all_nbrs,
-                            &zip_opts,
-                            &mut || c.checkpoint(),
-                        )?;
+                        let (tris, z) =
+                            closure::zip(&sorted, tris, all_nbrs, &zip_opts, &mut || {
+                                c.checkpoint()
+                            })?;
                         o.tris = tris;
                         o.stats.zip_triangles = z.triangles;
                         o.stats.zip_attached = z.attached;

@@ -326,7 +326,11 @@ impl Geometry for HoledPatch {
             cands.extend((0..self.holes.len()).map(|k| self.rim(k).closest(p)));
             cands
                 .into_iter()
-                .min_by(|a, b| (*a - p).length_squared().total_cmp(&(*b - p).length_squared()))
+                .min_by(|a, b| {
+                    (*a - p)
+                        .length_squared()
+                        .total_cmp(&(*b - p).length_squared())
+                })
                 .expect("candidates")
         };
         SurfacePoint {
@@ -404,11 +408,7 @@ impl Geometry for HoledPatch {
 
     fn grid_dims(&self, count: usize) -> (usize, usize) {
         // Enough grid nodes that about `count` fall outside the holes.
-        let hole_share: f64 = self
-            .holes
-            .iter()
-            .map(|h| PI * h.r * h.r)
-            .sum::<f64>()
+        let hole_share: f64 = self.holes.iter().map(|h| PI * h.r * h.r).sum::<f64>()
             / (4.0 * self.half.x * self.half.y);
         let nodes = count as f64 / (1.0 - hole_share);
         let ratio = self.half.x / self.half.y;
