@@ -503,12 +503,11 @@ fn close_edge<'b>(
         cands.push((angle(pa - pc, pb - pc), c));
     }
     cands.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
-    for &(_, c) in cands.iter().take(TRIES) {
-        if try_triangle(mesh, p, nbrs, o, [b, a, c], n_w) {
-            return Some(c);
-        }
-    }
-    None
+    cands
+        .iter()
+        .take(TRIES)
+        .map(|&(_, c)| c)
+        .find(|&c| try_triangle(mesh, p, nbrs, o, [b, a, c], n_w))
 }
 
 /// The checks of the module docs on t = (b, a, c) against W's normal `n_w`; adds t when
