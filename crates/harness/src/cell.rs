@@ -93,6 +93,14 @@ pub const DIAGNOSTIC_METRICS: &[&str] = &[
     "dev_p99",
     "dev_rms",
     "dev_above_eps",
+    // hc-it (seed 003): clusters, the triangulation's counters, the closure pass
+    // (`unmeshed` is shared with ebt above).
+    "nc_components",
+    "splits",
+    "flips",
+    "extra_cases",
+    "sweep_unmeshed",
+    "zip_triangles",
 ];
 
 /// Metrics that count input points as mesh vertices (the seed's V is the number of

@@ -99,6 +99,12 @@ pub trait Shape: Send + Sync + std::fmt::Debug {
     fn is_closed(&self) -> bool {
         true
     }
+    /// Number of boundary loops: 0 for a closed surface, 1 for an open sheet by default,
+    /// plus one per through-hole of a holed sheet (the truth the hole counts of a
+    /// reconstruction are compared with).
+    fn boundary_loops(&self) -> u32 {
+        u32::from(!self.is_closed())
+    }
     /// Sharp feature curves and corners (empty for smooth shapes).
     fn feature_curves(&self) -> Vec<FeatureCurve> {
         Vec::new()

@@ -7,7 +7,7 @@ use std::f64::consts::FRAC_PI_2;
 use glam::DVec3;
 
 use super::cluster::UnionFind;
-use super::mesh::{Mesh, NONE, angle, cross, min_angle, rotate_to};
+use super::mesh::{Mesh, NONE, angle, cross, crosses, min_angle, rotate_to};
 use super::params::{ConflictRule, EdgeDistance, WinnerScan};
 
 /// A boundary edge a -> b with its triangle.
@@ -59,6 +59,25 @@ pub struct Stats {
     pub refused: usize,
     /// Points with a winner search that found no boundary edge.
     pub no_winner: usize,
+    /// Triangles of the sweep alone (before the closure pass).
+    pub sweep_triangles: usize,
+    /// Points the sweep alone left unmeshed.
+    pub sweep_unmeshed: usize,
+    /// Triangles added by the closure pass.
+    pub zip_triangles: usize,
+    /// Sweep-unmeshed points the closure pass meshed.
+    pub zip_attached: usize,
+    /// Folded or overlapping sweep triangles the closure pass left out.
+    pub zip_unfolded: usize,
+    /// Triangles the closure pass added to fill small loops.
+    pub zip_filled: usize,
+    /// Faces reversed by the orientation by k (H14).
+    pub oriented_flips: usize,
+}
+
+/// Unnormalized normal of `t` (Eq. 1), for callers outside the engine.
+pub fn normal_of(p: &[DVec3], t: [u32; 3]) -> DVec3 {
+    cross(p, t)
 }
 
 impl Stats {
@@ -72,6 +91,13 @@ impl Stats {
         self.flips += o.flips;
         self.refused += o.refused;
         self.no_winner += o.no_winner;
+        self.sweep_triangles += o.sweep_triangles;
+        self.sweep_unmeshed += o.sweep_unmeshed;
+        self.zip_triangles += o.zip_triangles;
+        self.zip_attached += o.zip_attached;
+        self.zip_unfolded += o.zip_unfolded;
+        self.zip_filled += o.zip_filled;
+        self.oriented_flips += o.oriented_flips;
     }
 }
 
@@ -428,15 +454,6 @@ impl State<'_> {
         }
     }
 
-    /// Whether the 2-D projection (plane normal `nrm`) of segment p-q crosses r-s in their
-    /// interiors.
-    fn crosses(nrm: DVec3, p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool {
-        let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nrm);
-        let (d1, d2) = (orient(p, q, r), orient(p, q, s));
-        let (d3, d4) = (orient(r, s, p), orient(r, s, q));
-        d1 * d2 < 0.0 && d3 * d4 < 0.0
-    }
-
     /// ASSUMPTION H11 guards of a candidate (u, v, w) whose new edge is a-b: non-fold
     /// against T_new, the edge cap, the edge not yet present, and no 2-D overlap (in the
     /// plane of n_new) with the triangles at the candidate's vertices.
@@ -462,7 +479,7 @@ impl State<'_> {
                     if r == a || r == b || s == a || s == b {
                         continue;
                     }
-                    if Self::crosses(n_new, pa, pb, self.pt(r), self.pt(s)) {
+                    if crosses(n_new, pa, pb, self.pt(r), self.pt(s)) {
                         return false;
                     }
                 }

@@ -42,6 +42,25 @@ pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     ang(a, b, c).min(ang(b, c, a)).min(ang(c, a, b))
 }
 
+/// Whether the 2-D projection (plane normal `nrm`) of segment p-q crosses r-s in their
+/// interiors.
+pub fn crosses(nrm: DVec3, p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool {
+    let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nrm);
+    let (d1, d2) = (orient(p, q, r), orient(p, q, s));
+    let (d3, d4) = (orient(r, s, p), orient(r, s, q));
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+/// Circumradius of the triangle (a, b, c); infinite for a degenerate one.
+pub fn circumradius(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (ab, ac) = (b - a, c - a);
+    let n2 = ab.cross(ac).length_squared();
+    if n2 <= 0.0 {
+        return f64::INFINITY;
+    }
+    (ab.length_squared() * ac.length_squared() * (b - c).length_squared() / (4.0 * n2)).sqrt()
+}
+
 /// Triangle whose stored order traverses a -> b, rotated to start at `a`.
 #[inline]
 pub fn rotate_to(t: [u32; 3], a: u32) -> [u32; 3] {

@@ -14,6 +14,7 @@
 //! are the input points in input order (unmeshed ones unreferenced and listed as
 //! refused). See `docs/methods/hc_it.md`.
 
+pub mod closure;
 pub mod cluster;
 mod engine;
 mod mesh;
@@ -27,7 +28,7 @@ use reconbench_geom::spatial::{PointIndex, mean_spacing};
 use reconbench_geom::topology::MeshTopology;
 use reconbench_geom::{PointCloud, TriMesh};
 
-pub use params::{ConflictRule, EdgeDistance, HC_IT_DOCS, HcItParams, WinnerScan};
+pub use params::{Closure, ConflictRule, EdgeDistance, HC_IT_DOCS, HcItParams, WinnerScan};
 
 /// The `hc-it` reconstructor.
 #[derive(Debug, Clone, Default)]
@@ -112,6 +113,38 @@ fn check_input(pts: &[DVec3], order: &[u32]) -> Result<(), MethodError> {
     Ok(())
 }
 
+/// Points of `ranks` that no triangle of `tris` uses.
+fn unmeshed_in(tris: &[[u32; 3]], ranks: &[u32], n: usize) -> usize {
+    let mut used = vec![false; n];
+    for t in tris {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    ranks.iter().filter(|&&r| !used[r as usize]).count()
+}
+
+/// ASSUMPTION H14: reverses every face-connected component whose area-weighted normal
+/// points away from `k`; returns the number of faces reversed.
+fn orient_by_k(p: &[DVec3], tris: &mut [[u32; 3]], k: DVec3) -> usize {
+    let topo = MeshTopology::from_faces(p.len(), tris);
+    let (n, comp) = topo.face_components();
+    let mut sum = vec![0.0f64; n];
+    for (f, t) in tris.iter().enumerate() {
+        if let Some(s) = sum.get_mut(comp[f] as usize) {
+            *s += engine::normal_of(p, *t).dot(k);
+        }
+    }
+    let mut flipped = 0;
+    for (f, t) in tris.iter_mut().enumerate() {
+        if sum.get(comp[f] as usize).is_some_and(|&s| s < 0.0) {
+            t.swap(1, 2);
+            flipped += 1;
+        }
+    }
+    flipped
+}
+
 impl Reconstructor for HcIt {
     fn name(&self) -> &str {
         Self::NAME
@@ -137,25 +170,37 @@ impl Reconstructor for HcIt {
             // ASSUMPTION H2: a spatial index gives the same Lg sets as the paper's all-pairs
             // distances: the points strictly within rho (strict <) processed before P.
             let slab = slab_ids(&sorted, &p.slabs);
-            let (offs, idx) = {
+            let zipping = p.closure == Closure::Zip;
+            let (offs, idx, all_offs, all_idx) = {
                 let _g = ctx.phase_guard("neighbours");
                 let index = PointIndex::new(&sorted)?;
                 let table = index.radius_batch(&sorted, rho)?;
                 let mut offs = Vec::with_capacity(pts.len() + 1);
                 let mut idx = Vec::with_capacity(table.indices.len() / 2 + 1);
+                // Every neighbour of the same run (earlier and later), for the closure.
+                let mut all_offs = vec![0usize];
+                let mut all_idx = Vec::new();
                 offs.push(0usize);
                 let r2 = rho * rho;
                 for i in 0..pts.len() {
                     for (&j, &d2) in table.indices(i).iter().zip(table.dist2(i)) {
                         let (si, sj) = (slab[i], slab[j as usize]);
                         let same = !p.portions || si == sj;
-                        if d2 < r2 && (j as usize) < i && si >= 0 && sj >= 0 && same {
-                            idx.push(j);
+                        if d2 < r2 && si >= 0 && sj >= 0 && same && j as usize != i {
+                            if (j as usize) < i {
+                                idx.push(j);
+                            }
+                            if zipping {
+                                all_idx.push(j);
+                            }
                         }
                     }
                     offs.push(idx.len());
+                    if zipping {
+                        all_offs.push(all_idx.len());
+                    }
                 }
-                (offs, idx)
+                (offs, idx, all_offs, all_idx)
             };
             ctx.checkpoint()?;
             let k = DVec3::from_array(p.reference).normalize();
@@ -196,9 +241,31 @@ impl Reconstructor for HcIt {
                             .collect(),
                     ]
                 };
+                let all_nbrs = |i: u32| &all_idx[all_offs[i as usize]..all_offs[i as usize + 1]];
+                let zip_opts = closure::ZipOpts {
+                    rho,
+                    theta: p.theta_rad,
+                    max_radius: p.zip_radius * rho,
+                };
                 let mut out: Option<engine::Outcome> = None;
                 for ranks in &runs {
-                    let o = engine::run(&sorted, ranks, nbrs, &opts, &mut || c.checkpoint())?;
+                    let mut o = engine::run(&sorted, ranks, nbrs, &opts, &mut || c.checkpoint())?;
+                    o.stats.sweep_triangles = o.tris.len();
+                    o.stats.sweep_unmeshed = unmeshed_in(&o.tris, ranks, pts.len());
+                    if zipping {
+                        // Deviation (docs/methods/hc_it.md, "Closure pass"): per run, so
+                        // portions stay separate (H15).
+                        let tris = std::mem::take(&mut o.tris);
+                        let (tris, z) =
+                            closure::zip(&sorted, tris, all_nbrs, &zip_opts, &mut || {
+                                c.checkpoint()
+                            })?;
+                        o.tris = tris;
+                        o.stats.zip_triangles = z.triangles;
+                        o.stats.zip_attached = z.attached;
+                        o.stats.zip_unfolded = z.unfolded;
+                        o.stats.zip_filled = z.filled;
+                    }
                     out = Some(match out {
                         None => o,
                         // ASSUMPTION H15: concatenate the portions' meshes; they share no
@@ -215,6 +282,9 @@ impl Reconstructor for HcIt {
                     });
                 }
                 let mut out = out.expect("at least one run");
+                if p.orient_by_k {
+                    out.stats.oriented_flips = orient_by_k(&sorted, &mut out.tris, k);
+                }
                 // Back to input indices.
                 for t in &mut out.tris {
                     *t = t.map(|v| order[v as usize]);
@@ -269,6 +339,13 @@ impl Reconstructor for HcIt {
             num("flips", s.flips as f64);
             num("refused_triangles", s.refused as f64);
             num("no_winner", s.no_winner as f64);
+            num("sweep_triangles", s.sweep_triangles as f64);
+            num("sweep_unmeshed", s.sweep_unmeshed as f64);
+            num("zip_triangles", s.zip_triangles as f64);
+            num("zip_attached", s.zip_attached as f64);
+            num("zip_unfolded", s.zip_unfolded as f64);
+            num("zip_filled", s.zip_filled as f64);
+            num("oriented_flips", s.oriented_flips as f64);
             num("ignored", slab.iter().filter(|&&k| k < 0).count() as f64);
             let mesh = TriMesh::new(pts.to_vec(), out.tris)?;
             Ok(Reconstruction {

@@ -39,6 +39,18 @@ pub enum ConflictRule {
     Phi,
 }
 
+/// What runs after the sweep (a named deviation; `none` is the literal method).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Closure {
+    /// Nothing: the sweep's mesh as it is (the paper).
+    None,
+    /// The closure pass: mesh the points the sweep never revisited and zip the cracks
+    /// between NC meshes under the fold test, with triangles of circumradius at most
+    /// `zip_radius` rho, so wider holes stay open.
+    Zip,
+}
+
 /// Parameters of `hc-it` (spec 003 §1, §3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -76,6 +88,14 @@ pub struct HcItParams {
     /// concatenate, as the paper's example 9; off = ASSUMPTION H3, one sweep whose state
     /// carries over from slab to slab.
     pub portions: bool,
+    /// Deviation: the closure pass after the sweep (`zip`, default) or none (literal).
+    pub closure: Closure,
+    /// Largest circumradius of a closing triangle, as a multiple of rho: gaps a ball of
+    /// this radius cannot pass stay open.
+    pub zip_radius: f64,
+    /// ASSUMPTION H14: flip every mesh component whose area-weighted normal points away
+    /// from k (off = literal: each NC keeps the orientation of its first triangle).
+    pub orient_by_k: bool,
 }
 
 impl Default for HcItParams {
@@ -94,6 +114,9 @@ impl Default for HcItParams {
             flips: true,
             slabs: Vec::new(),
             portions: false,
+            closure: Closure::Zip,
+            zip_radius: 1.0,
+            orient_by_k: false,
         }
     }
 }
@@ -135,6 +158,12 @@ impl HcItParams {
             return Err(bad(
                 "ear_max_edge",
                 format!("must be >= 0, got {}", self.ear_max_edge),
+            ));
+        }
+        if !(self.zip_radius.is_finite() && self.zip_radius > 0.0) {
+            return Err(bad(
+                "zip_radius",
+                format!("must be > 0, got {}", self.zip_radius),
             ));
         }
         if self.slabs.len() == 1 {
@@ -224,5 +253,20 @@ pub const HC_IT_DOCS: &[ParamDoc] = &[
         "portions",
         Unit::Flag,
         "ASSUMPTION H15: mesh each slab separately and concatenate (paper example 9)",
+    ),
+    ParamDoc::new(
+        "closure",
+        Unit::Choice,
+        "deviation: zip (mesh unmeshed points, zip cracks between NC meshes) or none (literal)",
+    ),
+    ParamDoc::new(
+        "zip_radius",
+        Unit::None,
+        "largest circumradius of a closing triangle in multiples of rho (wider holes stay open)",
+    ),
+    ParamDoc::new(
+        "orient_by_k",
+        Unit::Flag,
+        "ASSUMPTION H14: orient every mesh component so its normals agree with k on average",
     ),
 ];

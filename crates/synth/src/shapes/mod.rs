@@ -25,6 +25,7 @@ pub mod blend_shapes;
 pub mod blind_hole;
 pub mod boxes;
 pub mod ellipsoid;
+pub mod hcit_standins;
 pub mod knot;
 pub mod mesh_shape;
 pub mod planes;
@@ -60,6 +61,10 @@ pub trait Geometry: Send + Sync + fmt::Debug {
     /// Closed surface?
     fn closed(&self) -> bool {
         true
+    }
+    /// Boundary loops (0 closed; an open sheet 1, plus one per through-hole).
+    fn boundary_loops(&self) -> u32 {
+        u32::from(!self.closed())
     }
     /// Exact sharp features.
     fn features(&self) -> Vec<Feature> {
@@ -170,6 +175,9 @@ impl<G: Geometry> Shape for Normalized<G> {
     }
     fn is_closed(&self) -> bool {
         self.g.closed()
+    }
+    fn boundary_loops(&self) -> u32 {
+        self.g.boundary_loops()
     }
     fn feature_curves(&self) -> Vec<FeatureCurve> {
         self.features.iter().map(|f| f.to_curve(1e-5)).collect()
@@ -512,6 +520,30 @@ static DEFS: &[ShapeDef] = &[
                 standins::StandIn::new(standins::StandInKind::Blade),
             ))
         },
+    },
+    ShapeDef {
+        name: "bolt-plate",
+        summary: "seed 003 stand-in (spare part): open flat plate, 150 x 100 mm, two bolt holes of radius 8 mm (3 boundary loops)",
+        params: &[],
+        build: |_| Ok(boxed("bolt-plate", hcit_standins::HoledPatch::bolt_plate())),
+    },
+    ShapeDef {
+        name: "eye-face",
+        summary: "seed 003 stand-in (face 2): open dome (sphere of radius 200 mm over 200 x 240 mm) with two eye holes of radius 14 mm (3 boundary loops)",
+        params: &[],
+        build: |_| Ok(boxed("eye-face", hcit_standins::HoledPatch::eye_face())),
+    },
+    ShapeDef {
+        name: "grooved-handle",
+        summary: "seed 003 stand-in (pan handle): closed capsule, radius 12 mm, 120 mm long, with three 3 mm grooves (sharp groove edges)",
+        params: &[],
+        build: |_| Ok(boxed("grooved-handle", hcit_standins::grooved_handle())),
+    },
+    ShapeDef {
+        name: "bottle",
+        summary: "seed 003 stand-in: closed bottle of revolution, 160 mm tall (filleted base, body radius 30 mm, shoulder, neck radius 10 mm)",
+        params: &[],
+        build: |_| Ok(boxed("bottle", hcit_standins::bottle())),
     },
     ShapeDef {
         name: "double-torus",

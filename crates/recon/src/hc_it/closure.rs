@@ -1,0 +1,563 @@
+//! The closure pass of `hc-it` (a named deviation, `closure = "zip"`, see
+//! `docs/methods/hc_it.md`): after the sweep, meshes the points the sweep never
+//! revisited and zips the cracks between NC meshes (failure modes 1 and 2 of spec §3.5).
+//!
+//! Every boundary edge a -> b of the sweep's mesh looks, on the far side from its
+//! triangle W, for the point c within rho of both a and b that sees a-b under the largest
+//! angle (the 2-D Delaunay choice, so no nearby point lies inside the new triangle). The
+//! triangle (b, a, c) is added only if
+//!
+//! * c is unmeshed or on a boundary (never an interior vertex of a mesh);
+//! * it keeps the mesh edge-manifold and consistently oriented ([`Mesh::can_add`]);
+//! * its normal is within `theta` of W's and of every triangle it closes against (the
+//!   sweep's fold test);
+//! * its circumradius is at most `max_radius`: a gap is covered only where a ball of that
+//!   radius fits through it, so a hole wider than that stays open (all triangles on the
+//!   rim of a round hole share the hole's circumcircle);
+//! * its new edges cross no edge of the triangles at its vertices (in its own plane).
+//!
+//! New boundary edges are queued; rounds repeat over every remaining boundary edge until
+//! one adds nothing (at most [`MAX_ROUNDS`]). The order is that of the triangles, so the
+//! result is deterministic and independent of the thread count.
+
+use std::collections::VecDeque;
+
+use glam::DVec3;
+
+use super::mesh::{Mesh, NONE, angle, circumradius, cross, crosses, min_angle};
+
+/// Passes of the fold vote at most.
+const UNFOLD_PASSES: usize = 4;
+
+/// Rounds over the remaining boundary edges at most.
+pub const MAX_ROUNDS: usize = 8;
+
+/// Options of the pass (lengths in input units).
+#[derive(Debug, Clone)]
+pub struct ZipOpts {
+    /// rho: the largest edge (the neighbour lists hold the points strictly within it).
+    pub rho: f64,
+    /// Fold threshold theta (rad).
+    pub theta: f64,
+    /// Largest circumradius of a closing triangle.
+    pub max_radius: f64,
+}
+
+/// Counters of the pass.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ZipStats {
+    /// Triangles added.
+    pub triangles: usize,
+    /// Points the sweep left unmeshed that the pass meshed.
+    pub attached: usize,
+    /// Rounds run.
+    pub rounds: usize,
+    /// Folded sweep triangles left out.
+    pub unfolded: usize,
+    /// Triangles filling small boundary loops.
+    pub filled: usize,
+}
+
+/// Loops of at most this many edges may be filled.
+const FILL_MAX_EDGES: usize = 16;
+
+/// Fills every boundary loop of at most [`FILL_MAX_EDGES`] edges whose vertices all lie
+/// within `max_radius` of their centroid (a pore a ball of that radius cannot pass) by
+/// ear clipping, the ear with the largest smallest angle first; a loop stays open when
+/// no ear keeps the mesh edge-manifold and consistently oriented. Returns the triangles
+/// added.
+fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -> usize {
+    let edges: Vec<(u32, u32)> = boundary_edges(mesh).collect();
+    let mut out: foldhash::HashMap<u32, Vec<u32>> = foldhash::HashMap::default();
+    for &(a, b) in &edges {
+        out.entry(a).or_default().push(b);
+    }
+    let mut used: foldhash::HashSet<(u32, u32)> = foldhash::HashSet::default();
+    let mut loops = Vec::new();
+    for &(a0, b0) in &edges {
+        if used.contains(&(a0, b0)) {
+            continue;
+        }
+        // Edges of a loop are marked once it closes; an open trace marks nothing.
+        let mut trace = vec![(a0, b0)];
+        let mut lp = vec![a0];
+        let (mut u, mut v) = (a0, b0);
+        let closed = loop {
+            if v == a0 {
+                break true;
+            }
+            if lp.len() > FILL_MAX_EDGES {
+                break false;
+            }
+            lp.push(v);
+            // At a vertex with several outgoing boundary edges (a bow-tie), the one that
+            // turns least counter-clockwise from the way back bounds the same gap.
+            let n = cross(p, mesh.tris[mesh.edge_tris(u, v)[0] as usize]);
+            let back = p[u as usize] - p[v as usize];
+            let next = out.get(&v).and_then(|ws| {
+                let free: Vec<u32> = ws
+                    .iter()
+                    .copied()
+                    .filter(|&w| !used.contains(&(v, w)) && !trace.contains(&(v, w)))
+                    .collect();
+                if free.len() == 1 {
+                    return Some(free[0]);
+                }
+                free.into_iter().min_by(|&x, &y| {
+                    let ccw = |w: u32| {
+                        let d = p[w as usize] - p[v as usize];
+                        let a = back.cross(d).dot(n).atan2(back.dot(d));
+                        if a <= 0.0 {
+                            a + std::f64::consts::TAU
+                        } else {
+                            a
+                        }
+                    };
+                    ccw(x).total_cmp(&ccw(y)).then(x.cmp(&y))
+                })
+            });
+            let Some(w) = next else {
+                break false;
+            };
+            trace.push((v, w));
+            (u, v) = (v, w);
+        };
+        if closed && lp.len() >= 3 {
+            used.extend(trace);
+            loops.push(lp);
+        }
+    }
+    let mut added = 0;
+    for lp in loops {
+        let c = lp.iter().map(|&v| p[v as usize]).sum::<DVec3>() / lp.len() as f64;
+        if lp
+            .iter()
+            .all(|&v| (p[v as usize] - c).length() <= max_radius)
+        {
+            added += clip_ears(mesh, p, theta, lp);
+        }
+    }
+    added
+}
+
+/// Ear clipping of one boundary loop (in boundary-edge order); returns the triangles added.
+fn clip_ears(mesh: &mut Mesh, p: &[DVec3], theta: f64, mut lp: Vec<u32>) -> usize {
+    let mut added = 0;
+    while lp.len() >= 3 {
+        let m = lp.len();
+        let mut best: Option<(f64, usize)> = None;
+        for i in 0..m {
+            let (v0, v1, v2) = (lp[i], lp[(i + 1) % m], lp[(i + 2) % m]);
+            let t = [v1, v0, v2];
+            if !mesh.can_add(t) {
+                continue;
+            }
+            // An ear: no fold against the triangles on its two loop edges, no other loop
+            // vertex inside it.
+            let n_t = cross(p, t);
+            let folds = [(v0, v1), (v1, v2)].iter().any(|&(a, b)| {
+                let f = mesh.edge_tris(a, b)[0];
+                f != NONE && angle(n_t, cross(p, mesh.tris[f as usize])) >= theta
+            });
+            if folds || n_t.length_squared() == 0.0 {
+                continue;
+            }
+            let nu = n_t.normalize();
+            let inside = lp.iter().any(|&q| {
+                if q == v0 || q == v1 || q == v2 {
+                    return false;
+                }
+                let x = p[q as usize];
+                let side = |a: u32, b: u32| {
+                    let (pa, pb) = (p[a as usize], p[b as usize]);
+                    (pb - pa).cross(x - pa).dot(nu) > 0.0
+                };
+                side(v1, v0) && side(v0, v2) && side(v2, v1)
+            });
+            if inside {
+                continue;
+            }
+            let q = min_angle(p[v0 as usize], p[v1 as usize], p[v2 as usize]);
+            if best.is_none_or(|(bq, _)| q > bq) {
+                best = Some((q, i));
+            }
+        }
+        let Some((_, i)) = best else {
+            break;
+        };
+        let (v0, v1, v2) = (lp[i], lp[(i + 1) % m], lp[(i + 2) % m]);
+        if mesh.add([v1, v0, v2]).is_none() {
+            break;
+        }
+        added += 1;
+        lp.remove((i + 1) % m);
+        if lp.len() == 2 {
+            break;
+        }
+    }
+    added
+}
+
+/// Runs the pass over `tris` (the sweep's mesh, a valid edge-manifold one) and returns the
+/// extended triangle list. `nbrs(i)` lists every point of the same run strictly within
+/// rho of point `i` (both earlier and later ones).
+pub fn zip<'b>(
+    p: &[DVec3],
+    tris: Vec<[u32; 3]>,
+    nbrs: impl Fn(u32) -> &'b [u32],
+    o: &ZipOpts,
+    checkpoint: &mut dyn FnMut() -> Result<(), reconbench_geom::method::MethodError>,
+) -> Result<(Vec<[u32; 3]>, ZipStats), reconbench_geom::method::MethodError> {
+    let meshed_before: Vec<bool> = {
+        let mut m = vec![false; p.len()];
+        for t in &tris {
+            for &v in t {
+                m[v as usize] = true;
+            }
+        }
+        m
+    };
+    let mut stats = ZipStats::default();
+    let (mut mesh, folded) = unfold(p, tris, &nbrs, o.theta);
+    stats.unfolded = folded;
+    let mut ctx = Rounds {
+        buf: Vec::new(),
+        cands: Vec::new(),
+        tried: 0,
+    };
+    // Phase 1 never gives a vertex a second fan; phase 2 may (to bridge two pieces that
+    // meet along a crack without a common vertex), and its later rounds fill the gaps;
+    // then the small loops left are filled, and all of it again while it adds triangles.
+    for _ in 0..CYCLES {
+        let mut added = 0;
+        for bowtie in [false, true] {
+            for _ in 0..MAX_ROUNDS {
+                stats.rounds += 1;
+                let a = ctx.round(&mut mesh, p, &nbrs, o, bowtie, checkpoint)?;
+                added += a;
+                stats.triangles += a;
+                if a == 0 {
+                    break;
+                }
+            }
+        }
+        let f = fill_small_loops(&mut mesh, p, o.max_radius, o.theta);
+        stats.filled += f;
+        if added + f == 0 {
+            break;
+        }
+    }
+    stats.attached = mesh
+        .vt
+        .iter()
+        .zip(&meshed_before)
+        .filter(|(l, before)| !l.is_empty() && !**before)
+        .count();
+    Ok((mesh.tris, stats))
+}
+
+/// Cycles of zipping and loop filling at most.
+const CYCLES: usize = 3;
+
+/// Scratch space of the zipping rounds.
+struct Rounds {
+    buf: Vec<(u32, u32, u32)>,
+    cands: Vec<(f64, u32)>,
+    tried: usize,
+}
+
+impl Rounds {
+    /// One round over every boundary edge (and the edges it creates); returns the
+    /// triangles added.
+    fn round<'b>(
+        &mut self,
+        mesh: &mut Mesh,
+        p: &[DVec3],
+        nbrs: &impl Fn(u32) -> &'b [u32],
+        o: &ZipOpts,
+        bowtie: bool,
+        checkpoint: &mut dyn FnMut() -> Result<(), reconbench_geom::method::MethodError>,
+    ) -> Result<usize, reconbench_geom::method::MethodError> {
+        let mut queue: VecDeque<(u32, u32)> = boundary_edges(mesh).collect();
+        let mut added = 0usize;
+        while let Some((a, b)) = queue.pop_front() {
+            self.tried += 1;
+            if self.tried.is_multiple_of(4096) {
+                checkpoint()?;
+            }
+            if !mesh.is_boundary(a, b) {
+                continue;
+            }
+            let Some(c) = close_edge(
+                mesh,
+                p,
+                nbrs,
+                o,
+                a,
+                b,
+                bowtie,
+                &mut self.buf,
+                &mut self.cands,
+            ) else {
+                continue;
+            };
+            added += 1;
+            for (u, v) in [(a, c), (c, b)] {
+                if mesh.is_boundary(u, v) {
+                    queue.push_back((u, v));
+                }
+            }
+        }
+        Ok(added)
+    }
+}
+
+/// Builds the mesh of `tris` without its folded triangles and its overlaps: first the
+/// triangles whose normal is at `theta` or more from the normals of more of the
+/// triangles across their edges than it agrees with are left out (repeated, so strips
+/// go too), such as the fold a split leaves when P lies outside the winner triangle in
+/// its plane; then, in the sweep's order, every
+/// triangle that overlaps one kept before it ([`overlaps`]). Returns the mesh and the
+/// number of triangles left out.
+fn unfold<'b>(
+    p: &[DVec3],
+    tris: Vec<[u32; 3]>,
+    nbrs: &impl Fn(u32) -> &'b [u32],
+    theta: f64,
+) -> (Mesh, usize) {
+    let mut full = Mesh::new(p.len());
+    for &t in &tris {
+        // The sweep's triangles passed the same checks in the same order.
+        let added = full.add(t);
+        debug_assert!(added.is_some(), "sweep triangle {t:?} re-added");
+    }
+    let mut keep = vec![true; tris.len()];
+    // Majority vote, repeated so that strips of folded triangles go too.
+    for _ in 0..UNFOLD_PASSES {
+        let fold: Vec<usize> = (0..tris.len())
+            .filter(|&id| keep[id])
+            .filter(|&id| {
+                let t = full.tris[id];
+                let n = cross(p, t);
+                let (mut agree, mut against) = (0, 0);
+                for k in 0..3 {
+                    if let Some(o) = full.across(id as u32, t[k], t[(k + 1) % 3])
+                        && keep[o as usize]
+                    {
+                        if angle(n, cross(p, full.tris[o as usize])) < theta {
+                            agree += 1;
+                        } else {
+                            against += 1;
+                        }
+                    }
+                }
+                against > agree
+            })
+            .collect();
+        if fold.is_empty() {
+            break;
+        }
+        for id in fold {
+            keep[id] = false;
+        }
+    }
+    let mut mesh = Mesh::new(p.len());
+    let mut dropped = 0;
+    for (t, k) in tris.into_iter().zip(keep) {
+        if k && !overlaps(&mesh, p, t, nbrs(t[0])) && mesh.add(t).is_some() {
+            continue;
+        }
+        dropped += 1;
+    }
+    (mesh, dropped)
+}
+
+/// Bounding box of a triangle.
+fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
+    let [a, b, c] = t.map(|v| p[v as usize]);
+    (a.min(b).min(c), a.max(b).max(c))
+}
+
+/// Whether triangle `t` overlaps a triangle of `mesh` at its vertices or at the points
+/// `near` (those whose centroid is within t's longest edge of t's plane): seen along t's
+/// normal, an edge of one crosses an edge of the other, or a vertex of one lies inside
+/// the other (shared vertices and edges excepted).
+fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
+    let n_t = cross(p, t);
+    if n_t.length_squared() == 0.0 {
+        return true;
+    }
+    let nu = n_t.normalize();
+    // Triangles farther from t's plane than its longest edge belong to another sheet.
+    let p0 = p[t[0] as usize];
+    let reach = (0..3)
+        .map(|k| (p[t[k] as usize] - p[t[(k + 1) % 3] as usize]).length())
+        .fold(0.0, f64::max);
+    let inside = |tri: [u32; 3], q: u32| {
+        if tri.contains(&q) {
+            return false;
+        }
+        let x = p[q as usize];
+        let side = |a: u32, b: u32| {
+            let (pa, pb) = (p[a as usize], p[b as usize]);
+            (pb - pa).cross(x - pa).dot(nu)
+        };
+        let s = [
+            side(tri[0], tri[1]),
+            side(tri[1], tri[2]),
+            side(tri[2], tri[0]),
+        ];
+        (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
+    };
+    // Only triangles whose box meets t's box grown by `reach` can overlap it.
+    let (lo, hi) = bbox(p, t);
+    let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
+    for &x in t.iter().chain(near) {
+        for &f in &mesh.vt[x as usize] {
+            let o = mesh.tris[f as usize];
+            let (olo, ohi) = bbox(p, o);
+            if olo.cmpgt(hi).any() || ohi.cmplt(lo).any() {
+                continue;
+            }
+            let oc = (p[o[0] as usize] + p[o[1] as usize] + p[o[2] as usize]) / 3.0;
+            if (oc - p0).dot(nu).abs() > reach {
+                continue;
+            }
+            for k in 0..3 {
+                let (u, v) = (t[k], t[(k + 1) % 3]);
+                for j in 0..3 {
+                    let (r, s) = (o[j], o[(j + 1) % 3]);
+                    if r == u || r == v || s == u || s == v {
+                        continue;
+                    }
+                    if crosses(
+                        nu,
+                        p[u as usize],
+                        p[v as usize],
+                        p[r as usize],
+                        p[s as usize],
+                    ) {
+                        return true;
+                    }
+                }
+            }
+            if o.iter().any(|&q| inside(t, q)) || t.iter().any(|&q| inside(o, q)) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// The directed boundary edges of `mesh`, in triangle order.
+fn boundary_edges(mesh: &Mesh) -> impl Iterator<Item = (u32, u32)> + '_ {
+    mesh.tris.iter().flat_map(move |t| {
+        (0..3).filter_map(move |k| {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            (mesh.edge_tris(a, b)[1] == NONE).then_some((a, b))
+        })
+    })
+}
+
+/// Candidates tried per boundary edge, in order of the angle they see it under.
+const TRIES: usize = 6;
+
+/// Tries to close the boundary edge a -> b; returns c when the triangle (b, a, c) was
+/// added. With `bowtie` off, a meshed c must already share an edge with the triangle, so
+/// no vertex gets a second fan.
+#[allow(clippy::too_many_arguments)]
+fn close_edge<'b>(
+    mesh: &mut Mesh,
+    p: &[DVec3],
+    nbrs: &impl Fn(u32) -> &'b [u32],
+    o: &ZipOpts,
+    a: u32,
+    b: u32,
+    bowtie: bool,
+    buf: &mut Vec<(u32, u32, u32)>,
+    cands: &mut Vec<(f64, u32)>,
+) -> Option<u32> {
+    let w = mesh.edge_tris(a, b)[0];
+    let n_w = cross(p, mesh.tris[w as usize]);
+    let (pa, pb) = (p[a as usize], p[b as usize]);
+    // Free or boundary points on the far side of a-b, by the angle they see it under.
+    cands.clear();
+    for &c in nbrs(a) {
+        if c == b {
+            continue;
+        }
+        let pc = p[c as usize];
+        if (pc - pb).length() >= o.rho || (pa - pb).cross(pc - pb).dot(n_w) <= 0.0 {
+            continue;
+        }
+        if !mesh.vt[c as usize].is_empty() {
+            buf.clear();
+            mesh.boundary_at(c, buf);
+            if buf.is_empty() {
+                continue;
+            }
+            if !bowtie && !mesh.has_edge(a, c) && !mesh.has_edge(c, b) {
+                continue;
+            }
+        }
+        cands.push((angle(pa - pc, pb - pc), c));
+    }
+    cands.sort_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+    cands
+        .iter()
+        .take(TRIES)
+        .map(|&(_, c)| c)
+        .find(|&c| try_triangle(mesh, p, nbrs, o, [b, a, c], n_w))
+}
+
+/// The checks of the module docs on t = (b, a, c) against W's normal `n_w`; adds t when
+/// they pass.
+fn try_triangle<'b>(
+    mesh: &mut Mesh,
+    p: &[DVec3],
+    nbrs: &impl Fn(u32) -> &'b [u32],
+    o: &ZipOpts,
+    t: [u32; 3],
+    n_w: DVec3,
+) -> bool {
+    let [b, a, c] = t;
+    let (pa, pb, pc) = (p[a as usize], p[b as usize], p[c as usize]);
+    if !mesh.can_add(t) {
+        return false;
+    }
+    if min_angle(pa, pb, pc) <= 1f64.to_radians() {
+        return false;
+    }
+    if circumradius(pa, pb, pc) > o.max_radius {
+        return false;
+    }
+    let n_t = cross(p, t);
+    if angle(n_t, n_w) >= o.theta {
+        return false;
+    }
+    // The fold test against every triangle the new one closes against.
+    for (u, v) in [(a, c), (c, b)] {
+        let [t0, _] = mesh.edge_tris(u, v);
+        if t0 != NONE && angle(n_t, cross(p, mesh.tris[t0 as usize])) >= o.theta {
+            return false;
+        }
+    }
+    // No other point inside the triangle (seen along its normal, within its
+    // circumradius), no overlap with the triangles around.
+    let nu = n_t.normalize();
+    let h = circumradius(pa, pb, pc);
+    let inside = |q: DVec3| {
+        let side = |x: DVec3, y: DVec3| (y - x).cross(q - x).dot(nu) > 0.0;
+        (q - pa).dot(nu).abs() < h && side(pb, pa) && side(pa, pc) && side(pc, pb)
+    };
+    if nbrs(a)
+        .iter()
+        .any(|&q| q != b && q != c && inside(p[q as usize]))
+    {
+        return false;
+    }
+    if overlaps(mesh, p, t, nbrs(a)) {
+        return false;
+    }
+    mesh.add(t).is_some()
+}
