@@ -237,7 +237,10 @@ fn sphere_cap_mesh_obeys_the_rules_and_has_one_boundary_loop() {
     for f in 0..r.mesh.n_faces() {
         let [a, b, c] = r.mesh.triangle(f);
         let rad = enclosing_radius(a, b, c);
-        assert!(rad <= omega / 2f64.sqrt() * (1.0 + 1e-6), "facet {f}: radius {rad}");
+        assert!(
+            rad <= omega / 2f64.sqrt() * (1.0 + 1e-6),
+            "facet {f}: radius {rad}"
+        );
     }
     assert!(num(&r, "crack_facets") > 0.0);
     // The literal growth keeps every edge within Omega.

@@ -22,7 +22,11 @@ pub fn enclosing_radius(a: DVec3, b: DVec3, c: DVec3) -> f64 {
         return 0.5 * l;
     }
     let area2 = (b - a).cross(c - a).length();
-    if area2 > 0.0 { x * y * z / (2.0 * area2) } else { 0.5 * l }
+    if area2 > 0.0 {
+        x * y * z / (2.0 * area2)
+    } else {
+        0.5 * l
+    }
 }
 
 /// Unnormalised normal of `a b c` (counter-clockwise seen from its side).

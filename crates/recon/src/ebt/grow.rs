@@ -16,8 +16,8 @@ use reconbench_geom::linalg::{covariance, sym_eigen3};
 use reconbench_geom::method::MethodError;
 
 use super::geometry::{
-    Proj, edge_key, enclosing_radius, face_cross, interior_distance, min_angle, orient, proper_cross,
-    segment_distance, strictly_inside,
+    Proj, edge_key, enclosing_radius, face_cross, interior_distance, min_angle, orient,
+    proper_cross, segment_distance, strictly_inside,
 };
 use super::grid::Grid;
 
@@ -369,10 +369,12 @@ impl<'a> Front<'a> {
         if self.try_ear(v) {
             return true;
         }
-        let Some(e) = self.crack_edge else {
+        // During the growth a crack ear keeps its closing edge within Omega: a longer
+        // boundary edge would stop later points from linking (E13) before they come.
+        if self.crack_edge.is_none() {
             return false;
-        };
-        if self.try_close(v, e) {
+        }
+        if self.try_close(v, self.omega) {
             self.crack_count += 1;
             return true;
         }
@@ -438,7 +440,11 @@ impl<'a> Front<'a> {
         // Mesh on the left of p -> v -> n: the gap turns clockwise from v->n to v->p.
         let (a, b) = (pr.at(self.p[n as usize]), pr.at(self.p[p as usize]));
         let g = b.perp_dot(a).atan2(b.dot(a));
-        Some(if g < 0.0 { g + std::f64::consts::TAU } else { g })
+        Some(if g < 0.0 {
+            g + std::f64::consts::TAU
+        } else {
+            g
+        })
     }
 
     /// Whether a point not yet meshed lies over the triangle `t` (inside its projection
@@ -480,10 +486,7 @@ impl<'a> Front<'a> {
         if (pp - pn).length() > max_edge || self.edges.contains(&edge_key(p, n)) {
             return false;
         }
-        if !self
-            .gap_angle(v)
-            .is_some_and(|g| g < std::f64::consts::PI)
-        {
+        if !self.gap_angle(v).is_some_and(|g| g < std::f64::consts::PI) {
             return false;
         }
         let nf = face_cross(pv, pp, pn);
@@ -636,8 +639,12 @@ impl<'a> Front<'a> {
             }
             saved.push(self.save(u));
             saved.push(self.save(b));
-            let (nfaces, edges_before, head, loop_len) =
-                (self.faces.len(), self.edge_log.len(), self.head, self.loop_len);
+            let (nfaces, edges_before, head, loop_len) = (
+                self.faces.len(),
+                self.edge_log.len(),
+                self.head,
+                self.loop_len,
+            );
             self.logging = true;
             let g1 = self.add_face(f1);
             let g2 = self.add_face(f2);
@@ -676,7 +683,10 @@ impl<'a> Front<'a> {
     /// The loop state of vertex `w` (next, prev, boundary facet, state).
     fn save(&self, w: u32) -> (u32, (u32, u32, u32, u8)) {
         let i = w as usize;
-        (w, (self.next[i], self.prev[i], self.bface[i], self.state[i]))
+        (
+            w,
+            (self.next[i], self.prev[i], self.bface[i], self.state[i]),
+        )
     }
 
     /// Restores what [`Self::save`] returned.

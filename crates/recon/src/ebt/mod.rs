@@ -261,7 +261,10 @@ fn quality_histograms(q: &[DVec3], faces: &[[u32; 3]], omega: f64, d: &mut Diagn
         d.insert((*name).into(), Diagnostic::Number(ang[k] as f64 / nf));
     }
     for (k, (_, name)) in EDGE_BINS.iter().enumerate() {
-        d.insert((*name).into(), Diagnostic::Number(edge[k] as f64 / edges.max(1) as f64));
+        d.insert(
+            (*name).into(),
+            Diagnostic::Number(edge[k] as f64 / edges.max(1) as f64),
+        );
     }
 }
 
