@@ -519,6 +519,13 @@ fn bad_input_is_an_error() {
                 ..EbtParams::default()
             },
         ),
+        (
+            "crack_closing",
+            EbtParams {
+                crack_closing: 0.5,
+                ..EbtParams::default()
+            },
+        ),
     ] {
         let err = Ebt::from_params(p).unwrap_err().to_string();
         assert!(err.contains(name), "{err}");
