@@ -327,7 +327,7 @@ impl Reconstructor for Ebt {
                 ear_angle: p.ear_angle_deg.to_radians(),
                 wake_deferred: p.wake_deferred,
                 seed,
-                crack_edge: (p.crack_closing > 0.0).then(|| p.crack_closing * t.omega),
+                crack_edge: (p.crack_closing > 0.0).then_some(p.crack_closing * t.omega),
             };
             let grown = {
                 let _g = ctx.phase_guard("mesh");
