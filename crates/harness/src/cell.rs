@@ -101,6 +101,20 @@ pub const DIAGNOSTIC_METRICS: &[&str] = &[
     "extra_cases",
     "sweep_unmeshed",
     "zip_triangles",
+    // ebt: crack closing, enhancements and the mesh-quality histograms (spec §6 item 4).
+    "crack_facets",
+    "swaps_e20",
+    "swaps_e21",
+    "feature_edges",
+    "min_angle_hist_0_12",
+    "min_angle_hist_12_20",
+    "min_angle_hist_20_30",
+    "min_angle_hist_30_45",
+    "min_angle_hist_45_60",
+    "edge_hist_0_050",
+    "edge_hist_050_075",
+    "edge_hist_075_100",
+    "edge_hist_above_100",
 ];
 
 /// Metrics that count input points as mesh vertices (the seed's V is the number of

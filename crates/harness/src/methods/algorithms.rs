@@ -34,6 +34,7 @@ pub fn entries() -> Vec<MethodEntry> {
         filter::<GridThinning>(),
         reconstruct::<PriorityFront>(),
         reconstruct::<Ebt>(),
+        reconstruct::<reconbench_recon::ebt::qem::QemSimplified>(),
         reconstruct::<HcIt>(),
         reconstruct::<Ufm>(),
         reconstruct::<Cocone>(),

@@ -13,6 +13,22 @@ pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     ang(a, b, c).min(ang(b, c, a)).min(ang(c, a, b))
 }
 
+/// Radius of the smallest disc containing the triangle `a b c`: half the longest edge
+/// when the triangle is right or obtuse, else its circumradius.
+pub fn enclosing_radius(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (x, y, z) = ((b - c).length(), (c - a).length(), (a - b).length());
+    let l = x.max(y).max(z);
+    if 2.0 * l * l >= x * x + y * y + z * z {
+        return 0.5 * l;
+    }
+    let area2 = (b - a).cross(c - a).length();
+    if area2 > 0.0 {
+        x * y * z / (2.0 * area2)
+    } else {
+        0.5 * l
+    }
+}
+
 /// Unnormalised normal of `a b c` (counter-clockwise seen from its side).
 pub fn face_cross(a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     (b - a).cross(c - a)

@@ -16,8 +16,8 @@ use reconbench_geom::linalg::{covariance, sym_eigen3};
 use reconbench_geom::method::MethodError;
 
 use super::geometry::{
-    Proj, edge_key, face_cross, interior_distance, min_angle, orient, proper_cross,
-    segment_distance, strictly_inside,
+    Proj, edge_key, enclosing_radius, face_cross, interior_distance, min_angle, orient,
+    proper_cross, segment_distance, strictly_inside,
 };
 use super::grid::Grid;
 
@@ -30,6 +30,9 @@ const TJ_REL: f64 = 1e-3;
 
 /// Seed candidates tried (nearest the centroid first) when no first triangle forms.
 const SEED_TRIES: usize = 64;
+
+/// Largest loop (vertices) a crack bridge may split off and fill.
+const BRIDGE_LOOP: usize = 24;
 
 /// Insertions between two calls of the cancellation check.
 const CHECK_EVERY: usize = 2048;
@@ -50,6 +53,9 @@ pub struct GrowOpts {
     pub wake_deferred: bool,
     /// Seed as an index into the points; `None` = ASSUMPTION E11.
     pub seed: Option<u32>,
+    /// Crack closing after the growth (a named deviation): the longest closing edge, or
+    /// `None` for the literal growth.
+    pub crack_edge: Option<f64>,
 }
 
 /// The grown mesh over the points given to [`grow`].
@@ -67,6 +73,10 @@ pub struct Grown {
     pub ears: usize,
     /// Points still deferred at the end of each pass, summed (E18).
     pub deferrals: usize,
+    /// Facets added by crack closing.
+    pub crack_facets: usize,
+    /// Per facet: added by crack closing.
+    pub crack_face: Vec<bool>,
 }
 
 /// The point of `points` nearest `x` (ties to the lower index): a user seed that
@@ -106,6 +116,16 @@ struct Front<'a> {
     chain: Vec<u32>,
     ok: Vec<bool>,
     seg: Vec<bool>,
+    /// Crack closing: the longest closing edge, `None` = literal growth.
+    crack_edge: Option<f64>,
+    /// Crack-closing facets added.
+    crack_count: usize,
+    /// Per facet: added by crack closing.
+    crack_face: Vec<bool>,
+    /// Edges inserted while a bridge is tentative (undone when it fails).
+    edge_log: Vec<u64>,
+    /// Whether a bridge is tentative.
+    logging: bool,
 }
 
 impl<'a> Front<'a> {
@@ -116,6 +136,7 @@ impl<'a> Front<'a> {
             self.p[f[2] as usize],
         );
         self.faces.push(f);
+        self.crack_face.push(false);
         self.normals.push(face_cross(a, b, c).normalize_or_zero());
         (self.faces.len() - 1) as u32
     }
@@ -315,7 +336,7 @@ impl<'a> Front<'a> {
         if ear_filling {
             let mut stack = vec![v0, vk];
             while let Some(w) = stack.pop() {
-                if self.state[w as usize] == BOUNDARY && self.try_ear(w) {
+                if self.state[w as usize] == BOUNDARY && self.try_fill(w) {
                     stack.push(self.prev[w as usize]);
                     stack.push(self.next[w as usize]);
                 }
@@ -330,17 +351,34 @@ impl<'a> Front<'a> {
     fn sweep_ears(&mut self) -> usize {
         let before = self.ears;
         loop {
-            let start = self.ears;
+            let (start, start_cracks) = (self.ears, self.crack_count);
             let mut v = self.head;
             for _ in 0..self.loop_len + 1 {
                 let n = self.next[v as usize];
-                self.try_ear(v);
+                self.try_fill(v);
                 v = n;
             }
-            if self.ears == start {
+            if self.ears == start && self.crack_count == start_cracks {
                 return self.ears - before;
             }
         }
+    }
+
+    /// An E19 ear at `v`, else (with crack closing on) a crack-closing ear.
+    fn try_fill(&mut self, v: u32) -> bool {
+        if self.try_ear(v) {
+            return true;
+        }
+        // During the growth a crack ear keeps its closing edge within Omega: a longer
+        // boundary edge would stop later points from linking (E13) before they come.
+        if self.crack_edge.is_none() {
+            return false;
+        }
+        if self.try_close(v, self.omega) {
+            self.crack_count += 1;
+            return true;
+        }
+        false
     }
 
     /// ASSUMPTION E19 (G3g): closes the ear at boundary vertex `v` when the gap angle is
@@ -372,16 +410,381 @@ impl<'a> Front<'a> {
         if !self.segment_ok(&pr, p, n) || !self.empty_triangle(&pr, [v, p, n]) {
             return false;
         }
+        self.clip(v);
+        self.ears += 1;
+        true
+    }
+
+    /// Adds the facet `(v, prev v, next v)` and removes `v` from the boundary loop.
+    fn clip(&mut self, v: u32) {
+        let (p, n) = (self.prev[v as usize], self.next[v as usize]);
         let f = self.add_face([v, p, n]);
-        self.edges.insert(edge_key(p, n));
+        self.log_edge(edge_key(p, n));
         self.state[v as usize] = INTERIOR;
         self.next[p as usize] = n;
         self.prev[n as usize] = p;
         self.bface[p as usize] = f;
         self.head = p;
         self.loop_len -= 1;
-        self.ears += 1;
+    }
+
+    /// The gap angle at boundary vertex `v` (radians, in `[0, 2 pi)`): the angle outside
+    /// the mesh between its two boundary edges, in the plane normal to the mean of the
+    /// two boundary facets' normals. Below pi the gap is convex and an ear fits in it.
+    fn gap_angle(&self, v: u32) -> Option<f64> {
+        let (p, n) = (self.prev[v as usize], self.next[v as usize]);
+        let nrm = (self.normals[self.bface[p as usize] as usize]
+            + self.normals[self.bface[v as usize] as usize])
+            .try_normalize()?;
+        let pr = Proj::new(self.p[v as usize], nrm);
+        // Mesh on the left of p -> v -> n: the gap turns clockwise from v->n to v->p.
+        let (a, b) = (pr.at(self.p[n as usize]), pr.at(self.p[p as usize]));
+        let g = b.perp_dot(a).atan2(b.dot(a));
+        Some(if g < 0.0 {
+            g + std::f64::consts::TAU
+        } else {
+            g
+        })
+    }
+
+    /// Whether a point not yet meshed lies over the triangle `t` (inside its projection
+    /// `pr`, within Omega of its plane): crack closing leaves such a gap to the point.
+    fn covers_free_point(&self, pr: &Proj, t: [u32; 3]) -> bool {
+        let [a, b, c] = t.map(|i| self.p[i as usize]);
+        let Some(n) = face_cross(a, b, c).try_normalize() else {
+            return true;
+        };
+        let (qa, qb, qc) = (pr.at(a), pr.at(b), pr.at(c));
+        let centre = (a + b + c) / 3.0;
+        let r = (a - centre)
+            .length()
+            .max((b - centre).length())
+            .max((c - centre).length());
+        let mut hit = false;
+        self.grid.for_each_near(centre, r, |j| {
+            let x = self.p[j as usize];
+            if !hit
+                && self.state[j as usize] == FREE
+                && (x - a).dot(n).abs() < self.omega
+                && strictly_inside(pr.at(x), qa, qb, qc)
+            {
+                hit = true;
+            }
+        });
+        hit
+    }
+
+    /// Crack closing (a named deviation, not the paper's; docs/methods/ebt.md): the ear
+    /// at `v` across a convex gap, its closing edge up to `max_edge`, under Rules 2-3,
+    /// the fold test and the projected overlap tests of the ears.
+    fn try_close(&mut self, v: u32, max_edge: f64) -> bool {
+        if self.state[v as usize] != BOUNDARY || self.cycle_of_three(v) {
+            return false;
+        }
+        let (p, n) = (self.prev[v as usize], self.next[v as usize]);
+        let (pv, pp, pn) = (self.p[v as usize], self.p[p as usize], self.p[n as usize]);
+        if (pp - pn).length() > max_edge || self.edges.contains(&edge_key(p, n)) {
+            return false;
+        }
+        if !self.gap_angle(v).is_some_and(|g| g < std::f64::consts::PI) {
+            return false;
+        }
+        let nf = face_cross(pv, pp, pn);
+        if min_angle(pv, pp, pn) <= self.min_angle || !self.within_bound_disc([v, p, n]) {
+            return false;
+        }
+        if nf.dot(self.normals[self.bface[p as usize] as usize]) <= 0.0
+            || nf.dot(self.normals[self.bface[v as usize] as usize]) <= 0.0
+        {
+            return false;
+        }
+        let Some(nu) = nf.try_normalize() else {
+            return false;
+        };
+        // Every point of the ear is within Omega of v and a boundary edge is at most
+        // max_edge <= 2 Omega long: edges that can cross it have an endpoint within 2 Omega.
+        self.gather(pv, 2.0 * self.omega);
+        let pr = Proj::new(pv, nu);
+        if !self.segment_ok(&pr, p, n) {
+            return false;
+        }
+        if !self.empty_triangle(&pr, [v, p, n]) {
+            return false;
+        }
+        if self.covers_free_point(&pr, [v, p, n]) {
+            return false;
+        }
+        self.clip(v);
+        if let Some(x) = self.crack_face.last_mut() {
+            *x = true;
+        }
         true
+    }
+
+    /// Whether the facet `f` fits in a disc of radius Omega / sqrt 2 (a crack-closing
+    /// facet: every point of it is then within Omega / sqrt 2 of a vertex, the distance
+    /// bound of the paper's Appendix A; a facet whose edges are at most Omega has
+    /// radius at most Omega / sqrt 3).
+    fn within_bound_disc(&self, f: [u32; 3]) -> bool {
+        let [a, b, c] = f.map(|i| self.p[i as usize]);
+        enclosing_radius(a, b, c) <= self.omega * std::f64::consts::FRAC_1_SQRT_2 * (1.0 + 1e-9)
+    }
+
+    /// Whether the boundary cycle through `v` has three vertices (a triangular hole).
+    fn cycle_of_three(&self, v: u32) -> bool {
+        let n = |x: u32| self.next[x as usize];
+        n(n(n(v))) == v
+    }
+
+    /// Whether the facet `f` passes Rule 2 and lies within 90 degrees of the facets
+    /// `g` (boundary facets next to it).
+    fn facet_fits(&self, f: [u32; 3], g: &[u32]) -> bool {
+        let [a, b, c] = f.map(|i| self.p[i as usize]);
+        let nf = face_cross(a, b, c);
+        min_angle(a, b, c) > self.min_angle
+            && self.within_bound_disc(f)
+            && g.iter().all(|&h| nf.dot(self.normals[h as usize]) > 0.0)
+    }
+
+    /// Bridges a crack where two arms of the front met (a named deviation, with crack
+    /// closing): the boundary edge `u -> v` and a facing boundary edge `a -> b` (`a`
+    /// near `v`, `b` near `u`, every new edge at most `max_edge`) are joined by two
+    /// facets over the shorter diagonal, which splits off the loop `v ... a`; that loop
+    /// (at most `BRIDGE_LOOP` vertices) is then filled by crack-closing ears. When it
+    /// cannot be filled completely, everything is undone, so the boundary stays one loop.
+    fn try_bridge(&mut self, u: u32, max_edge: f64) -> bool {
+        let v = self.next[u as usize];
+        let (pu, pv) = (self.p[u as usize], self.p[v as usize]);
+        let mut near = Vec::new();
+        {
+            let (state, p) = (&self.state, self.p);
+            self.grid.for_each_near(pv, max_edge, |j| {
+                if state[j as usize] == BOUNDARY && (p[j as usize] - pv).length() <= max_edge {
+                    near.push(j);
+                }
+            });
+        }
+        near.sort_unstable_by(|&x, &y| {
+            (self.p[x as usize] - pv)
+                .length_squared()
+                .total_cmp(&(self.p[y as usize] - pv).length_squared())
+                .then(x.cmp(&y))
+        });
+        for a in near {
+            let b = self.next[a as usize];
+            if [u, v].contains(&a) || [u, v].contains(&b) {
+                continue;
+            }
+            let (pa, pb) = (self.p[a as usize], self.p[b as usize]);
+            if (pb - pu).length() > max_edge {
+                continue;
+            }
+            // The split-off loop v ... a must be short.
+            let mut len = 1;
+            let mut w = v;
+            while w != a && len <= BRIDGE_LOOP {
+                w = self.next[w as usize];
+                len += 1;
+            }
+            if w != a {
+                continue;
+            }
+            let (fu, fa) = (self.bface[u as usize], self.bface[a as usize]);
+            // Shorter diagonal: v-b or u-a.
+            let (f1, f2, diag) = if (pv - pb).length() <= (pu - pa).length() {
+                ([v, u, b], [b, a, v], (v, b))
+            } else {
+                ([v, u, a], [u, b, a], (u, a))
+            };
+            if [(u, b), (a, v), diag]
+                .iter()
+                .any(|&(x, y)| self.edges.contains(&edge_key(x, y)))
+                || (self.p[diag.0 as usize] - self.p[diag.1 as usize]).length() > max_edge
+                || !self.facet_fits(f1, &[fu, fa])
+                || !self.facet_fits(f2, &[fu, fa])
+            {
+                continue;
+            }
+            let [q0, q1, q2] = f1.map(|i| self.p[i as usize]);
+            let [r0, r1, r2] = f2.map(|i| self.p[i as usize]);
+            if face_cross(q0, q1, q2).dot(face_cross(r0, r1, r2)) <= 0.0 {
+                continue;
+            }
+            let Some(nrm) = (face_cross(q0, q1, q2).normalize_or_zero()
+                + face_cross(r0, r1, r2).normalize_or_zero())
+            .try_normalize() else {
+                continue;
+            };
+            self.gather(pv, 2.0 * self.omega + max_edge);
+            let pr = Proj::new(pv, nrm);
+            if !self.segment_ok(&pr, u, b)
+                || !self.segment_ok(&pr, a, v)
+                || !self.segment_ok(&pr, diag.0, diag.1)
+                || !self.empty_triangle(&pr, f1)
+                || !self.empty_triangle(&pr, f2)
+                || self.covers_free_point(&pr, f1)
+                || self.covers_free_point(&pr, f2)
+            {
+                continue;
+            }
+            // Tentative: journal what changes, fill the split-off loop, or undo.
+            let mut saved = Vec::with_capacity(len + 2);
+            let mut w = v;
+            loop {
+                saved.push(self.save(w));
+                if w == a {
+                    break;
+                }
+                w = self.next[w as usize];
+            }
+            saved.push(self.save(u));
+            saved.push(self.save(b));
+            let (nfaces, edges_before, head, loop_len) = (
+                self.faces.len(),
+                self.edge_log.len(),
+                self.head,
+                self.loop_len,
+            );
+            self.logging = true;
+            let g1 = self.add_face(f1);
+            let g2 = self.add_face(f2);
+            for (x, y) in [(u, b), (a, v), diag] {
+                self.log_edge(edge_key(x, y));
+            }
+            let (bu, ba) = if diag == (v, b) { (g1, g2) } else { (g2, g1) };
+            self.next[u as usize] = b;
+            self.prev[b as usize] = u;
+            self.bface[u as usize] = bu;
+            self.next[a as usize] = v;
+            self.prev[v as usize] = a;
+            self.bface[a as usize] = ba;
+            let filled = self.fill_loop(v, max_edge);
+            self.logging = false;
+            if filled {
+                self.crack_face[nfaces..].fill(true);
+                self.edge_log.truncate(edges_before);
+                return true;
+            }
+            for (w, st) in saved.into_iter().rev() {
+                self.restore(w, st);
+            }
+            for k in self.edge_log.drain(edges_before..) {
+                self.edges.remove(&k);
+            }
+            self.faces.truncate(nfaces);
+            self.normals.truncate(nfaces);
+            self.crack_face.truncate(nfaces);
+            self.head = head;
+            self.loop_len = loop_len;
+        }
+        false
+    }
+
+    /// The loop state of vertex `w` (next, prev, boundary facet, state).
+    fn save(&self, w: u32) -> (u32, (u32, u32, u32, u8)) {
+        let i = w as usize;
+        (
+            w,
+            (self.next[i], self.prev[i], self.bface[i], self.state[i]),
+        )
+    }
+
+    /// Restores what [`Self::save`] returned.
+    fn restore(&mut self, w: u32, st: (u32, u32, u32, u8)) {
+        let i = w as usize;
+        (self.next[i], self.prev[i], self.bface[i], self.state[i]) = st;
+    }
+
+    /// Inserts an edge, recording it while a bridge is tentative.
+    fn log_edge(&mut self, k: u64) {
+        if self.edges.insert(k) && self.logging {
+            self.edge_log.push(k);
+        }
+    }
+
+    /// Fills the boundary cycle through `v` completely by crack-closing ears (smallest
+    /// gap angle first) and a last triangle; false when an ear is missing.
+    fn fill_loop(&mut self, v: u32, max_edge: f64) -> bool {
+        let mut cur = v;
+        loop {
+            if self.cycle_of_three(cur) {
+                let (p, n) = (self.prev[cur as usize], self.next[cur as usize]);
+                let f = [cur, p, n];
+                let g = [
+                    self.bface[p as usize],
+                    self.bface[cur as usize],
+                    self.bface[n as usize],
+                ];
+                if !self.facet_fits(f, &g) {
+                    return false;
+                }
+                self.add_face(f);
+                for w in f {
+                    self.state[w as usize] = INTERIOR;
+                }
+                return true;
+            }
+            let mut ring = vec![cur];
+            let mut w = self.next[cur as usize];
+            while w != cur {
+                ring.push(w);
+                w = self.next[w as usize];
+            }
+            let mut order: Vec<(f64, u32)> = ring
+                .iter()
+                .filter_map(|&w| self.gap_angle(w).map(|g| (g, w)))
+                .filter(|&(g, _)| g < std::f64::consts::PI)
+                .collect();
+            order.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+            let Some(&(_, w)) = order.iter().find(|&&(_, w)| self.try_close(w, max_edge)) else {
+                return false;
+            };
+            cur = self.prev[w as usize];
+        }
+    }
+
+    /// Closes cracks after the growth: ears across convex gaps of the boundary loop,
+    /// smallest gap angle first (a priority queue, stale entries re-queued with their
+    /// current angle), until none passes. The loop stays one loop (the mesh a disc); a
+    /// rim whose gaps are at least pi, or whose ears would break Rule 2, stays open.
+    /// Returns the number of facets added.
+    fn close_cracks(&mut self, max_edge: f64) -> usize {
+        use std::cmp::Reverse;
+        use std::collections::BinaryHeap;
+        let key = |g: f64| (g * 1e9) as u64;
+        let mut heap = BinaryHeap::new();
+        let mut v = self.head;
+        for _ in 0..self.loop_len {
+            if let Some(g) = self.gap_angle(v).filter(|&g| g < std::f64::consts::PI) {
+                heap.push(Reverse((key(g), v)));
+            }
+            v = self.next[v as usize];
+        }
+        let mut added = 0;
+        while let Some(Reverse((k, v))) = heap.pop() {
+            if self.state[v as usize] != BOUNDARY || self.loop_len <= 3 {
+                continue;
+            }
+            let Some(g) = self.gap_angle(v) else {
+                continue;
+            };
+            if key(g) != k {
+                if g < std::f64::consts::PI {
+                    heap.push(Reverse((key(g), v)));
+                }
+                continue;
+            }
+            let (p, n) = (self.prev[v as usize], self.next[v as usize]);
+            if self.try_close(v, max_edge) {
+                added += 1;
+                for w in [p, n] {
+                    if let Some(g) = self.gap_angle(w).filter(|&g| g < std::f64::consts::PI) {
+                        heap.push(Reverse((key(g), w)));
+                    }
+                }
+            }
+        }
+        added
     }
 }
 
@@ -504,6 +907,11 @@ pub fn grow(
         chain: Vec::new(),
         ok: Vec::new(),
         seg: Vec::new(),
+        crack_edge: opts.crack_edge,
+        crack_count: 0,
+        crack_face: Vec::new(),
+        edge_log: Vec::new(),
+        logging: false,
     };
     let f0 = fr.add_face(t0);
     for k in 0..3 {
@@ -586,7 +994,28 @@ pub fn grow(
         }
         pending = deferred;
     }
+    if let Some(e) = opts.crack_edge {
+        fr.crack_count += fr.close_cracks(e);
+        let before = fr.faces.len();
+        let mut u = fr.head;
+        let mut seen = 0usize;
+        let total = fr.loop_len;
+        // One walk around the loop; a successful bridge fills a part of it.
+        while seen <= total {
+            seen += 1;
+            let next = fr.next[u as usize];
+            if fr.state[u as usize] == BOUNDARY && fr.try_bridge(u, e) {
+                u = fr.next[u as usize];
+                continue;
+            }
+            u = next;
+        }
+        fr.crack_count += fr.faces.len() - before;
+    }
+    let crack_facets = fr.crack_count;
     Ok(Grown {
+        crack_facets,
+        crack_face: fr.crack_face,
         meshed: fr.state.iter().map(|&x| x != FREE).collect(),
         faces: fr.faces,
         seed: s,

@@ -23,6 +23,7 @@ mod geometry;
 mod grid;
 mod grow;
 pub mod params;
+pub mod qem;
 pub mod validate;
 
 use glam::DVec3;
@@ -214,6 +215,59 @@ pub fn deviation(pts: &[DVec3], mesh: &TriMesh, eps: f64) -> Result<Option<[f64;
     Ok(Some([d[d.len() - 1], d[rank - 1], rms, above]))
 }
 
+/// Bins of the smallest-angle histogram (degrees; spec §6 item 4) and their names.
+const ANGLE_BINS: [(f64, &str); 5] = [
+    (12.0, "min_angle_hist_0_12"),
+    (20.0, "min_angle_hist_12_20"),
+    (30.0, "min_angle_hist_20_30"),
+    (45.0, "min_angle_hist_30_45"),
+    (f64::INFINITY, "min_angle_hist_45_60"),
+];
+
+/// Bins of the edge-length histogram (length / Omega; spec §6 item 4) and their names.
+const EDGE_BINS: [(f64, &str); 4] = [
+    (0.5, "edge_hist_0_050"),
+    (0.75, "edge_hist_050_075"),
+    (1.0 + 1e-6, "edge_hist_075_100"),
+    (f64::INFINITY, "edge_hist_above_100"),
+];
+
+/// Inserts the shares of facets per smallest-angle bin and of edges (each counted once)
+/// per length / Omega bin (spec §6 item 4).
+fn quality_histograms(q: &[DVec3], faces: &[[u32; 3]], omega: f64, d: &mut Diagnostics) {
+    if faces.is_empty() {
+        return;
+    }
+    let mut ang = [0usize; ANGLE_BINS.len()];
+    let mut keys: Vec<u64> = Vec::with_capacity(3 * faces.len());
+    for f in faces {
+        let [a, b, c] = f.map(|i| q[i as usize]);
+        let m = geometry::min_angle(a, b, c).to_degrees();
+        ang[ANGLE_BINS.iter().position(|b| m < b.0).unwrap_or(0)] += 1;
+        keys.extend((0..3).map(|k| geometry::edge_key(f[k], f[(k + 1) % 3])));
+    }
+    // Each undirected edge once.
+    keys.sort_unstable();
+    keys.dedup();
+    let mut edge = [0usize; EDGE_BINS.len()];
+    for &k in &keys {
+        let (u, v) = ((k >> 32) as usize, (k & 0xffff_ffff) as usize);
+        let l = (q[u] - q[v]).length() / omega;
+        edge[EDGE_BINS.iter().position(|b| l < b.0).unwrap_or(0)] += 1;
+    }
+    let edges = keys.len();
+    let nf = faces.len() as f64;
+    for (k, (_, name)) in ANGLE_BINS.iter().enumerate() {
+        d.insert((*name).into(), Diagnostic::Number(ang[k] as f64 / nf));
+    }
+    for (k, (_, name)) in EDGE_BINS.iter().enumerate() {
+        d.insert(
+            (*name).into(),
+            Diagnostic::Number(edge[k] as f64 / edges.max(1) as f64),
+        );
+    }
+}
+
 /// The `ebt` reconstructor.
 #[derive(Debug, Clone, Default)]
 pub struct Ebt {
@@ -273,6 +327,7 @@ impl Reconstructor for Ebt {
                 ear_angle: p.ear_angle_deg.to_radians(),
                 wake_deferred: p.wake_deferred,
                 seed,
+                crack_edge: (p.crack_closing > 0.0).then_some(p.crack_closing * t.omega),
             };
             let grown = {
                 let _g = ctx.phase_guard("mesh");
@@ -285,7 +340,9 @@ impl Reconstructor for Ebt {
             let num = |d: &mut Diagnostics, k: &str, v: f64| {
                 d.insert(k.to_string(), Diagnostic::Number(v));
             };
-            let before = validate::bad_facets(&q, &faces, t.omega, theta)?;
+            // With crack closing, R1 is checked against the closing edge.
+            let closure = opts.crack_edge;
+            let before = validate::bad_facets_with_closure(&q, &faces, t.omega, theta, closure)?;
             if p.feature_align || p.equilateral {
                 let _g = ctx.phase_guard("enhance");
                 let eps = p.epsilon * t.diag;
@@ -303,7 +360,7 @@ impl Reconstructor for Ebt {
             }
             let bad = if p.feature_align || p.equilateral {
                 ctx.phase("validate", || {
-                    validate::bad_facets(&q, &faces, t.omega, theta)
+                    validate::bad_facets_with_closure(&q, &faces, t.omega, theta, closure)
                 })?
             } else {
                 before
@@ -325,7 +382,19 @@ impl Reconstructor for Ebt {
             num(&mut d, "seed_point", f64::from(t.kept[grown.seed as usize]));
             num(&mut d, "passes", grown.passes as f64);
             num(&mut d, "ears", grown.ears as f64);
+            num(&mut d, "crack_facets", grown.crack_facets as f64);
+            let long = faces
+                .iter()
+                .filter(|f| {
+                    (0..3).any(|k| {
+                        (q[f[k] as usize] - q[f[(k + 1) % 3] as usize]).length()
+                            > t.omega * (1.0 + 1e-6)
+                    })
+                })
+                .count();
+            num(&mut d, "long_edge_facets", long as f64);
             num(&mut d, "deferrals", grown.deferrals as f64);
+            quality_histograms(&q, &faces, t.omega, &mut d);
             let min_ang = faces
                 .iter()
                 .map(|f| geometry::min_angle(q[f[0] as usize], q[f[1] as usize], q[f[2] as usize]))

@@ -253,6 +253,9 @@ pub struct EbtParams {
     pub feature_angle_deg: f64,
     /// ASSUMPTION E20: constrained Lawson swaps towards equilateral triangles.
     pub equilateral: bool,
+    /// Crack closing after the growth (a named deviation, docs/methods/ebt.md): the
+    /// longest closing edge as a multiple of Omega; 0 = the literal growth.
+    pub crack_closing: f64,
     /// Measure the distance of every input point to the mesh (diagnostics `dev_*`).
     pub deviation: bool,
 }
@@ -280,6 +283,7 @@ impl Default for EbtParams {
             feature_align: false,
             feature_angle_deg: 30.0,
             equilateral: false,
+            crack_closing: std::f64::consts::SQRT_2,
             deviation: true,
         }
     }
@@ -339,6 +343,11 @@ pub const EBT_DOCS: &[ParamDoc] = &[
         "constrained Lawson max-min-angle swaps (ASSUMPTION E20; not the paper's)",
     ),
     ParamDoc::new(
+        "crack_closing",
+        Unit::None,
+        "close cracks by ears up to this x Omega after the growth (deviation; sqrt 2 = 1.414); 0 = literal",
+    ),
+    ParamDoc::new(
         "deviation",
         Unit::Flag,
         "measure every input point's distance to the mesh (dev_* diagnostics)",
@@ -385,6 +394,15 @@ impl EbtParams {
             return Err(bad(
                 "seed_point",
                 format!("must be -1 or a point index, got {}", self.seed_point),
+            ));
+        }
+        if !(self.crack_closing == 0.0 || (1.0..=2.0).contains(&self.crack_closing)) {
+            return Err(bad(
+                "crack_closing",
+                format!(
+                    "must be 0 (off) or in [1, 2] (a multiple of Omega), got {}",
+                    self.crack_closing
+                ),
             ));
         }
         if !(self.feature_angle_deg.is_finite()

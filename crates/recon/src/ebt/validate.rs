@@ -52,10 +52,24 @@ pub fn bad_facets(
     omega: f64,
     theta: f64,
 ) -> Result<BadFacets, MethodError> {
+    bad_facets_with_closure(verts, faces, omega, theta, None)
+}
+
+/// [`bad_facets`] with crack closing on: R1 is checked against the longest closing
+/// edge `closing_edge` (when larger than Omega) instead of Omega, on every facet, since
+/// a closing edge becomes a boundary edge that later facets may take (the deviation
+/// allows it; docs/methods/ebt.md). `None` is [`bad_facets`].
+pub fn bad_facets_with_closure(
+    verts: &[DVec3],
+    faces: &[[u32; 3]],
+    omega: f64,
+    theta: f64,
+    closing_edge: Option<f64>,
+) -> Result<BadFacets, MethodError> {
     let nf = faces.len();
     let mut flags = vec![0u8; nf];
     let tri = |f: usize| faces[f].map(|i| verts[i as usize]);
-    let lmax = omega * (1.0 + 1e-6);
+    let lmax = closing_edge.map_or(omega, |e| e.max(omega)) * (1.0 + 1e-6);
     let mut longest = 0.0f64;
     for (f, fl) in flags.iter_mut().enumerate() {
         let [a, b, c] = tri(f);
