@@ -129,13 +129,12 @@ impl Mesher<'_> {
                     self.pts[a as usize],
                     self.pts[b as usize],
                 );
-                if k > 3 {
-                    if pz.distance_squared(pb) > lim2
+                if k > 3
+                    && (pz.distance_squared(pb) > lim2
                         || self.adj.has(z, b)
-                        || diagonals.contains(&(z.min(b), z.max(b)))
-                    {
-                        continue;
-                    }
+                        || diagonals.contains(&(z.min(b), z.max(b))))
+                {
+                    continue;
                 }
                 let n = tri_normal(pz, pb, pa);
                 if n == DVec3::ZERO
@@ -425,7 +424,7 @@ fn best_edge(
             let (pu, pv) = (pts[u as usize], pts[v as usize]);
             let e = pv - pu;
             let ll = e.length_squared();
-            if !(ll > 0.0) {
+            if ll.is_nan() || ll <= 0.0 {
                 continue;
             }
             let s = (p - pu).dot(e) / ll;
@@ -498,7 +497,7 @@ fn covers(pts: &[DVec3], t: [u32; 3], p: DVec3) -> Option<(f64, f64)> {
     let [a, b, c] = t.map(|i| pts[i as usize]);
     let nrm = (b - a).cross(c - a);
     let nn = nrm.length_squared();
-    if !(nn > 0.0) {
+    if nn.is_nan() || nn <= 0.0 {
         return None;
     }
     // Signed areas of the sub-triangles with p, along the normal: all positive inside.
