@@ -8,7 +8,7 @@
 //! triangle (b, a, c) is added only if
 //!
 //! * c is unmeshed or on a boundary (never an interior vertex of a mesh);
-//! * it keeps the mesh edge-manifold and consistently oriented ([`Mesh::can_add`]);
+//! * it keeps the mesh edge-manifold and consistently oriented (`Mesh::can_add`);
 //! * its normal is within `theta` of W's and of every triangle it closes against (the
 //!   sweep's fold test);
 //! * its circumradius is at most `max_radius`: a gap is covered only where a ball of that
