@@ -21,6 +21,7 @@
 //! Every method implements [`reconbench_geom::method::Reconstructor`] and has a serde
 //! `Params` struct with documented defaults.
 
+mod angle;
 pub mod ball_pivoting;
 pub mod cocone;
 mod diag;

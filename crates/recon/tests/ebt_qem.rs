@@ -1,26 +1,11 @@
 //! Tests of `qem-simplified` (seed 004's full-mesh + QEM baseline): the vertex budget is
 //! met, the vertices are input points, and the simplified sphere stays close to it.
 
-use std::f64::consts::PI;
-
-use glam::DVec3;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Describe, Reconstructor, RunCtx};
 use reconbench_geom::spatial::MeshBvh;
 use reconbench_recon::ebt::qem::{FullMesher, QemParams, QemSimplified};
-
-/// Golden-spiral points on the unit sphere.
-fn sphere(n: usize) -> Vec<DVec3> {
-    let ga = PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - z * z).sqrt();
-            let t = ga * i as f64;
-            DVec3::new(s * t.cos(), s * t.sin(), z)
-        })
-        .collect()
-}
+use reconbench_testkit::feature_fixtures::sphere;
 
 #[test]
 fn budget_met_on_input_points_and_close_to_the_sphere() {

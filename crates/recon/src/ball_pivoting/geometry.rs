@@ -1,6 +1,7 @@
 //! Ball geometry: the centre of a ball of radius ρ touching three points on the positive
 //! side of their triangle, and the angle a centre has on the pivot circle of an edge.
 
+use crate::angle::pseudo_angle;
 use glam::DVec3;
 
 /// Circumcentre of triangle `(a, b, c)` and its squared circumradius, or `None` when the
@@ -114,24 +115,6 @@ impl PivotFrame {
     pub fn angle(&self, x: DVec3) -> f64 {
         let d = x - self.m;
         pseudo_angle(d.dot(self.e1), d.dot(self.e2))
-    }
-}
-
-/// The diamond angle of the direction `(c, s)` in `[0, 4)`: monotone in
-/// `atan2(s, c)` taken in `[0, 2π)`, and invariant under positive scaling.
-#[inline]
-pub(crate) fn pseudo_angle(c: f64, s: f64) -> f64 {
-    let (ac, as_) = (c.abs(), s.abs());
-    let sum = ac + as_;
-    if sum == 0.0 {
-        return 0.0;
-    }
-    let t = as_ / sum;
-    match (c >= 0.0, s >= 0.0) {
-        (true, true) => t,
-        (false, true) => 2.0 - t,
-        (false, false) => 2.0 + t,
-        (true, false) => 4.0 - t,
     }
 }
 

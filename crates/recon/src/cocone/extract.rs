@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use reconbench_delaunay::{Delaunay, NO_TET};
 
 use super::poles::{apex, outward_normal};
+use crate::angle::pseudo_angle;
 
 const NONE: u32 = u32::MAX;
 
@@ -399,23 +400,6 @@ impl<'a> Complex<'a> {
         }
         placed[j as usize] = true;
         true
-    }
-}
-
-/// A monotone stand-in in `[0, 4)` for the angle `atan2(s, c)` taken in `[0, 2π)`
-/// (the "diamond angle": 0 along `+c`, 1 along `+s`, 2 along `−c`).
-fn pseudo_angle(c: f64, s: f64) -> f64 {
-    let (ac, as_) = (c.abs(), s.abs());
-    let sum = ac + as_;
-    if sum == 0.0 {
-        return 0.0;
-    }
-    let t = as_ / sum;
-    match (c >= 0.0, s >= 0.0) {
-        (true, true) => t,
-        (false, true) => 2.0 - t,
-        (false, false) => 2.0 + t,
-        (true, false) => 4.0 - t,
     }
 }
 
