@@ -60,7 +60,7 @@ fn main() {
     let seeds = env_list("PF_SEEDS", &[1, 2, 3]);
     let selfx = std::env::var("PF_NOSELF").is_err();
     println!(
-        "set threads seed | genus comp loops bnd_edges | refused on_surface | self_pairs | faces s"
+        "set threads seed | genus comp loops bnd_edges | refused on_surface | self_pairs | faces reversed s"
     );
     for name in &sets {
         let path = if name.ends_with(".ply") {
@@ -76,6 +76,7 @@ fn main() {
             }
         }
         let cloud = PointCloud::new(mesh.vertices().to_vec()).expect("finite points");
+        let truth_normals = vertex_normals(&mesh);
         for &t in &threads {
             let pf = PriorityFront::new(params(t as usize)).expect("valid params");
             for &s in &seeds {
@@ -93,8 +94,9 @@ fn main() {
                 } else {
                     "-".to_string()
                 };
+                let reversed = reversed_faces(&rec.mesh, &truth_normals);
                 println!(
-                    "{name} {t} {s} | {} {} {} {} | {} {on} | {pairs} | {} {secs:.3}",
+                    "{name} {t} {s} | {} {} {} {} | {} {on} | {pairs} | {} {reversed} {secs:.3}",
                     topo.genus.map_or("-".to_string(), |g| g.to_string()),
                     topo.components,
                     topo.n_boundary_loops(),
@@ -108,6 +110,34 @@ fn main() {
             }
         }
     }
+}
+
+/// Area-weighted vertex normals of the reference mesh.
+fn vertex_normals(mesh: &reconbench_geom::TriMesh) -> Vec<glam::DVec3> {
+    let v = mesh.vertices();
+    let mut n = vec![glam::DVec3::ZERO; v.len()];
+    for f in mesh.faces() {
+        let [a, b, c] = f.map(|i| v[i as usize]);
+        let fn_ = (b - a).cross(c - a);
+        for &i in f {
+            n[i as usize] += fn_;
+        }
+    }
+    n
+}
+
+/// Output faces whose normal points against the reference normals at their corners
+/// (a piece grown with the wrong orientation).
+fn reversed_faces(mesh: &reconbench_geom::TriMesh, truth: &[glam::DVec3]) -> usize {
+    let v = mesh.vertices();
+    mesh.faces()
+        .iter()
+        .filter(|f| {
+            let [a, b, c] = f.map(|i| v[i as usize]);
+            let sum: glam::DVec3 = f.iter().map(|&i| truth[i as usize]).sum();
+            (b - a).cross(c - a).dot(sum) < 0.0
+        })
+        .count()
 }
 
 /// Each component's faces, genus and loops; each boundary loop's edges, length and the

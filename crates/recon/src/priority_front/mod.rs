@@ -31,6 +31,7 @@ mod density;
 mod grid;
 mod holes;
 mod mesher;
+mod orient;
 mod parallel;
 pub mod params;
 mod run;
@@ -185,15 +186,19 @@ impl PriorityFront {
         let mut grown = if p.threads <= 1 {
             grow_serial(&lay, cfg, &dcfg, &mut rng, ctx, t_grow)?
         } else {
-            let outs = grow_slabs_phase(&lay, &cfg, &dcfg, ctx, t_grow)?;
-            stitch_phase(&lay, cfg, &dcfg, &outs, &mut rng, ctx)?
+            let mut outs = grow_slabs_phase(&lay, &cfg, &dcfg, ctx, t_grow)?;
+            stitch_phase(&lay, cfg, &dcfg, &mut outs, &mut rng, ctx)?
         };
         let grow_secs = t_grow.elapsed().as_secs_f64();
         let inserted = insert_phase(&mut grown, &lay, p, rho, ctx);
         num(&mut diag, "inserted_points", inserted as f64);
 
         // M9: Free points become Refused; map back to input indices.
-        let (faces, refused) = output_phase(&grown, &lay.order, n, ctx);
+        let (mut faces, refused) = output_phase(&grown, &lay.order, n, ctx);
+        if p.seed_outward && p.seed_orient_front {
+            let reversed = orient::outward_pieces(input, &mut faces, lay.centroid);
+            num(&mut diag, "reversed_faces", reversed as f64);
+        }
         if faces.is_empty() && spans_plane(input, &dup) {
             return Err(MethodError::Failed(format!(
                 "priority-front made no triangle on {} distinct points that span a plane \
@@ -445,6 +450,10 @@ fn grow_slabs_phase(
     Ok(outs)
 }
 
+/// Radius, in R, within which a slab piece's front edge looks for the facing front of
+/// the slabs before it (IMPL-CHOICE I16): the Free band between two slabs is 2 R wide.
+const SLAB_ORIENT_RADIUS: f64 = 4.0;
+
 /// Joins the slab meshes into one mesher (timed as `stitch`): imports them, sweeps the
 /// bands and every front, restarts over the whole cloud for what the slabs left, then
 /// closes small holes (and zips parallel loops with `stitch_zip`).
@@ -452,12 +461,15 @@ fn stitch_phase(
     lay: &Layout,
     cfg: Cfg,
     dcfg: &DomainCfg,
-    outs: &[parallel::SlabOut],
+    outs: &mut [parallel::SlabOut],
     rng: &mut ChaCha8Rng,
     ctx: &mut RunCtx,
 ) -> Result<Grown, MethodError> {
     let p = dcfg.params;
     let t_st = Instant::now();
+    if p.seed_orient_front {
+        parallel::orient_slab_pieces(&lay.pts, outs, SLAB_ORIENT_RADIUS * cfg.r);
+    }
     let mut m = Mesher::new(&lay.pts, &lay.grid, cfg, &lay.refused0);
     parallel::stitch_import(&mut m, outs, p.stitch_one_sided);
     // One-sided sweep of the bands (no revisits yet), then every front.
@@ -576,13 +588,14 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 /// A one-line record of every ASSUMPTION flag in force (spec §7 item 9).
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
-        "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} A11={:?} A12={} A16={} A17=mirror:{} \
+        "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
          A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},insert:{},plane_h<=max({}rho,{}rms) threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
         p.patch_neighbours,
         p.seed_outward,
+        p.seed_orient_front,
         p.score_distance,
         p.apex_angle_rule,
         p.link_prev,

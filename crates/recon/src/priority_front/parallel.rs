@@ -172,6 +172,147 @@ pub(crate) fn grow_slabs(
     })
 }
 
+/// A live front edge of a slab: `(a, b, index of the next edge, normal, cost)`.
+type SlabEdge = (u32, u32, u32, DVec3, f64);
+
+/// IMPL-CHOICE I16 for the stitch (issue 20, `seed_orient_front`): every slab's first
+/// seed is oriented by A9's centroid rule, which is wrong when it lands in a concave
+/// region; its piece then faces the neighbouring slab's mesh with the opposite
+/// orientation and the two can never merge (mechpart: 15 % of the faces reversed with
+/// two threads). So, slab by slab, each vertex-connected piece whose front edges run
+/// the same way as the facing front edges of the slabs before it is reversed. A front
+/// edge faces the nearest earlier edge (midpoints within `radius`) lying within 30° of
+/// its own triangle's plane, each on the other's free side; two fronts bounding consistently oriented meshes across a
+/// gap run in opposite directions. A piece flips on a strict majority of its votes.
+pub(crate) fn orient_slab_pieces(pts: &[DVec3], outs: &mut [SlabOut], radius: f64) {
+    let mut reference: Vec<SlabEdge> = Vec::new();
+    for out in outs.iter_mut() {
+        if !reference.is_empty() && !out.edges.is_empty() {
+            orient_pieces(pts, &reference, out, radius);
+        }
+        reference.extend(out.edges.iter().copied());
+    }
+}
+
+/// Reverses the pieces of `out` that the front edges of `reference` vote against.
+fn orient_pieces(pts: &[DVec3], reference: &[SlabEdge], out: &mut SlabOut, radius: f64) {
+    let cell = |p: DVec3| (p / radius).floor().as_ivec3().to_array();
+    let mid = |a: u32, b: u32| 0.5 * (pts[a as usize] + pts[b as usize]);
+    let mut buckets: std::collections::HashMap<[i32; 3], Vec<u32>> =
+        std::collections::HashMap::new();
+    for (k, &(a, b, ..)) in reference.iter().enumerate() {
+        buckets.entry(cell(mid(a, b))).or_default().push(k as u32);
+    }
+    let mut piece = VertexPieces::new(pts.len(), &out.tris);
+    let mut votes: std::collections::BTreeMap<u32, i64> = std::collections::BTreeMap::new();
+    for &(a, b, _, nf, _) in &out.edges {
+        let mf = mid(a, b);
+        let tf = pts[b as usize] - pts[a as usize];
+        let c = cell(mf);
+        let mut best: Option<(f64, u32, bool)> = None;
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let Some(list) = buckets.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
+                        continue;
+                    };
+                    for &k in list {
+                        let (ea, eb, _, ne, _) = reference[k as usize];
+                        let d = mid(ea, eb) - mf;
+                        let off = d.dot(nf).abs();
+                        let along = d.reject_from(nf).length();
+                        if d.length() > radius || off > TAN_30 * along || along == 0.0 {
+                            continue;
+                        }
+                        let te = pts[eb as usize] - pts[ea as usize];
+                        // Facing: each edge lies on the other's free side (the side away
+                        // from its own mesh, the same whichever way a piece is oriented),
+                        // which leaves out an edge continuing this one along a rim.
+                        let facing = |from: DVec3, t: DVec3, n: DVec3| {
+                            from.dot(t.cross(n).normalize_or_zero()) > FACING_MIN * from.length()
+                        };
+                        if !facing(d, tf, nf) || !facing(-d, te, ne) {
+                            continue;
+                        }
+                        let consistent = te.dot(tf) < 0.0;
+                        if best.is_none_or(|(bo, bk, _)| off < bo || (off == bo && k < bk)) {
+                            best = Some((off, k, consistent));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some((_, _, consistent)) = best {
+            *votes.entry(piece.of(a)).or_default() += if consistent { 1 } else { -1 };
+        }
+    }
+    let flip: std::collections::BTreeSet<u32> = votes
+        .into_iter()
+        .filter(|&(_, v)| v < 0)
+        .map(|(p, _)| p)
+        .collect();
+    if flip.is_empty() {
+        return;
+    }
+    for t in out.tris.iter_mut() {
+        if flip.contains(&piece.of(t[0])) {
+            t.swap(1, 2);
+        }
+    }
+    // A reversed loop: each edge b -> a, its next the old previous edge.
+    let mut prev = vec![NONE; out.edges.len()];
+    for (k, e) in out.edges.iter().enumerate() {
+        if let Some(slot) = prev.get_mut(e.2 as usize) {
+            *slot = k as u32;
+        }
+    }
+    for (k, e) in out.edges.iter_mut().enumerate() {
+        if flip.contains(&piece.of(e.0)) && prev[k] != NONE {
+            *e = (e.1, e.0, prev[k], -e.3, e.4);
+        }
+    }
+}
+
+/// cos 60°: how far to the free side of an edge a facing edge must lie, as a share of
+/// their distance.
+const FACING_MIN: f64 = 0.5;
+
+/// tan 30°: the largest elevation of a facing front edge above an edge's triangle plane.
+const TAN_30: f64 = 0.577_350_269_189_625_8;
+
+/// Vertex-connected pieces of a triangle list (union-find over the point indices).
+struct VertexPieces {
+    parent: Vec<u32>,
+}
+
+impl VertexPieces {
+    fn new(n: usize, tris: &[[u32; 3]]) -> Self {
+        let mut s = Self {
+            parent: (0..n as u32).collect(),
+        };
+        for t in tris {
+            for &v in &t[1..] {
+                let (r0, r) = (s.of(t[0]), s.of(v));
+                if r != r0 {
+                    s.parent[r.max(r0) as usize] = r.min(r0);
+                }
+            }
+        }
+        s
+    }
+
+    /// The piece of vertex `v`: the smallest point index of its piece.
+    fn of(&mut self, v: u32) -> u32 {
+        let mut x = v;
+        while self.parent[x as usize] != x {
+            let g = self.parent[self.parent[x as usize] as usize];
+            self.parent[x as usize] = g;
+            x = g;
+        }
+        x
+    }
+}
+
 /// Imports slab results into `m` (the global state) and re-activates the fronts of the
 /// even-numbered slabs only. Each Free band between two slabs is then grown from one
 /// side (the even slab's), so that front sweeps across the band and meets the other
@@ -190,4 +331,82 @@ pub(crate) fn stitch_import(m: &mut Mesher, outs: &[SlabOut], one_sided: bool) {
         }
     }
     m.push_only(&even);
+}
+
+#[cfg(test)]
+mod orient_tests {
+    use super::*;
+
+    /// Two unit squares in the plane z = 0 facing each other across a gap of 0.5 along
+    /// x: slab 0 oriented +z, slab 1 oriented `up` (`true`: +z, `false`: -z), each with
+    /// its one front loop.
+    fn two_slabs(up: bool) -> (Vec<DVec3>, Vec<SlabOut>) {
+        let p = |x: f64, y: f64| DVec3::new(x, y, 0.0);
+        let pts = vec![
+            p(0.0, 0.0),
+            p(1.0, 0.0),
+            p(1.0, 1.0),
+            p(0.0, 1.0),
+            p(1.5, 0.0),
+            p(2.5, 0.0),
+            p(2.5, 1.0),
+            p(1.5, 1.0),
+        ];
+        let loop_of = |v: [u32; 4], n: DVec3| -> Vec<SlabEdge> {
+            (0..4)
+                .map(|k| (v[k], v[(k + 1) % 4], ((k + 1) % 4) as u32, n, 0.0))
+                .collect()
+        };
+        let s0 = SlabOut {
+            tris: vec![[0, 1, 2], [0, 2, 3]],
+            edges: loop_of([0, 1, 2, 3], DVec3::Z),
+            ..SlabOut::default()
+        };
+        let s1 = if up {
+            SlabOut {
+                tris: vec![[4, 5, 6], [4, 6, 7]],
+                edges: loop_of([4, 5, 6, 7], DVec3::Z),
+                ..SlabOut::default()
+            }
+        } else {
+            SlabOut {
+                tris: vec![[4, 6, 5], [4, 7, 6]],
+                edges: loop_of([4, 7, 6, 5], -DVec3::Z),
+                ..SlabOut::default()
+            }
+        };
+        (pts, vec![s0, s1])
+    }
+
+    fn normal(pts: &[DVec3], t: [u32; 3]) -> DVec3 {
+        let [a, b, c] = t.map(|i| pts[i as usize]);
+        (b - a).cross(c - a)
+    }
+
+    #[test]
+    fn a_reversed_slab_piece_is_flipped_with_its_front_loop() {
+        let (pts, mut outs) = two_slabs(false);
+        orient_slab_pieces(&pts, &mut outs, 2.0);
+        assert!(outs[1].tris.iter().all(|&t| normal(&pts, t).z > 0.0));
+        // The front loop is reversed as a loop: each edge's next starts where it ends,
+        // and the mesh lies left of every edge seen from its (now +z) normal.
+        let e = &outs[1].edges;
+        for &(a, b, nx, n, _) in e {
+            assert_eq!(e[nx as usize].0, b);
+            assert!(n.z > 0.0);
+            let left = n.cross(pts[b as usize] - pts[a as usize]);
+            let centre = DVec3::new(2.0, 0.5, 0.0);
+            assert!(left.dot(centre - pts[a as usize]) > 0.0, "{a}->{b}");
+        }
+        // Slab 0 is the reference and never changes.
+        assert_eq!(outs[0].tris, vec![[0, 1, 2], [0, 2, 3]]);
+    }
+
+    #[test]
+    fn a_consistent_slab_piece_is_kept() {
+        let (pts, mut outs) = two_slabs(true);
+        let before = (outs[1].tris.clone(), outs[1].edges.clone());
+        orient_slab_pieces(&pts, &mut outs, 2.0);
+        assert_eq!((outs[1].tris.clone(), outs[1].edges.clone()), before);
+    }
 }

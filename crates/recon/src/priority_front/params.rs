@@ -64,6 +64,13 @@ pub struct PriorityFrontParams {
     /// Orient the seed triangle's normal away from the cloud centroid (ASSUMPTION A9;
     /// default true). When false the seed keeps the fan orientation of its patch.
     pub seed_outward: bool,
+    /// Orient whole pieces rather than seed triangles (IMPL-CHOICE I16, not in the
+    /// paper; default true, a deviation for issue 20): before the two-thread stitch each
+    /// slab piece takes the orientation of the facing front of the slabs before it, and
+    /// every output piece whose signed volume seen from the centroid is negative is
+    /// reversed. A9 alone orients one seed triangle, which is wrong when it lands in a
+    /// concave region. false = A9 only.
+    pub seed_orient_front: bool,
     /// Allow link-prev, the mirror of the paper's link (ASSUMPTION A16; default true).
     pub link_prev: bool,
     /// Try the mirror repair when glue's second triangle fails (ASSUMPTION A17; default
@@ -232,6 +239,10 @@ impl Default for PriorityFrontParams {
             score_distance: ScoreDistance::default(),
             apex_angle_rule: false,
             seed_outward: true,
+            // DEVIATION (issue 20): IMPL-CHOICE I16; A9 alone left restarted and slab
+            // pieces inverted on the golf club, mechpart and bunny
+            // (docs/methods/priority_front.md).
+            seed_orient_front: true,
             link_prev: true,
             glue_mirror: true,
             cross_radius: 2.0,
@@ -487,6 +498,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "seed_outward",
         Unit::Flag,
         "orient the seed away from the centroid (A9)",
+    ),
+    ParamDoc::new(
+        "seed_orient_front",
+        Unit::Flag,
+        "I16: orient slab pieces by the facing front before the stitch and every output piece outward (true; false = A9 only)",
     ),
     ParamDoc::new(
         "link_prev",
