@@ -2,6 +2,9 @@
 
 use glam::DVec3;
 
+/// Volumes below this share of a piece's area x reach are rounding noise.
+const FLAT: f64 = 1e-9;
+
 /// Reverses every vertex-connected piece of `faces` whose signed volume seen from
 /// `centre` (the sum of the tetrahedra `centre, a, b, c`) is negative: A9's
 /// away-from-the-centroid rule applied to a whole piece rather than to its seed
@@ -9,7 +12,8 @@ use glam::DVec3;
 /// depend on `centre`; on an open one it is the flux of the piece seen from it. A piece
 /// that faces the centre as a whole (the inside of a hollow part seen from a point
 /// outside it) would be reversed wrongly; such clouds need `seed_orient_front = false`.
-/// Returns the number of reversed faces.
+/// A piece whose volume is within rounding of zero (a plane through the centre) is
+/// kept. Returns the number of reversed faces.
 pub(crate) fn outward_pieces(pts: &[DVec3], faces: &mut [[u32; 3]], centre: DVec3) -> usize {
     let mut parent: Vec<u32> = (0..pts.len() as u32).collect();
     let find = |parent: &mut Vec<u32>, mut x: u32| {
@@ -29,14 +33,20 @@ pub(crate) fn outward_pieces(pts: &[DVec3], faces: &mut [[u32; 3]], centre: DVec
         }
     }
     let mut volume = vec![0.0f64; pts.len()];
+    // Per piece: the sum of |2 area| x the piece's reach from the centre, the scale of
+    // the rounding noise the volume of a flat piece seen from its own plane carries.
+    let mut scale = vec![0.0f64; pts.len()];
     let roots: Vec<u32> = faces.iter().map(|f| find(&mut parent, f[0])).collect();
     for (f, &r) in faces.iter().zip(&roots) {
         let [a, b, c] = f.map(|i| pts[i as usize] - centre);
         volume[r as usize] += a.dot(b.cross(c));
+        let reach = a.length().max(b.length()).max(c.length());
+        scale[r as usize] += (b - a).cross(c - a).length() * reach;
     }
     let mut reversed = 0;
     for (f, &r) in faces.iter_mut().zip(&roots) {
-        if volume[r as usize] < 0.0 {
+        // A piece flat in a plane through the centre has no outward side: kept.
+        if volume[r as usize] < -FLAT * scale[r as usize] {
             f.swap(1, 2);
             reversed += 1;
         }
@@ -82,6 +92,29 @@ mod tests {
             12
         );
         assert_eq!(inv, faces);
+    }
+
+    #[test]
+    fn a_flat_piece_through_the_centre_is_kept_either_way() {
+        let pts: Vec<DVec3> = (0..9)
+            .map(|i| DVec3::new(0.1 * (i % 3) as f64, 0.3 * (i / 3) as f64 - 0.3, 0.0))
+            .collect();
+        let grid = [
+            [0, 1, 4],
+            [0, 4, 3],
+            [1, 2, 5],
+            [1, 5, 4],
+            [3, 4, 7],
+            [3, 7, 6],
+        ];
+        for faces in [
+            grid.to_vec(),
+            grid.iter().map(|f| [f[0], f[2], f[1]]).collect(),
+        ] {
+            let mut out = faces.clone();
+            assert_eq!(outward_pieces(&pts, &mut out, DVec3::new(0.1, 0.0, 0.0)), 0);
+            assert_eq!(out, faces);
+        }
     }
 
     #[test]
