@@ -517,10 +517,10 @@ fn uniform_box_crease_regression() {
 /// The 2-thread stitch used to leave a thin ring slit around the tube at the far edge of
 /// a slab band on some inputs (two parallel loops of ~25 vertices 0.4 rho apart, edges
 /// up to 9 rho): the harness torus `torus:R=2,r=0.7`, 35,947 blue-noise points, seed 3.
-/// IMPL-CHOICE I9 (`stitch_zip`) zips such loop pairs; without it the mesh is two
-/// components with four boundary loops (checked too, so the test sees the fix work).
-/// Measured with I14 and I15 off: with I14 on (the default) this run keeps three loops
-/// of 3-4 edges that neither the zip nor the I15 fill closes (an ear would cross).
+/// IMPL-CHOICE I9 (`stitch_zip`) zips such loop pairs; without it (and without I16) the
+/// mesh keeps boundary loops (checked too, so the test sees the fix work). I16 removes
+/// the cause: the two slabs' pieces had opposite orientations. Measured with I14 and
+/// I15 off.
 #[test]
 fn two_thread_stitch_closes_the_band_on_a_36k_torus() {
     let pts = synth_cloud("torus:R=2,r=0.7", true, 35_947, 3);
@@ -535,11 +535,15 @@ fn two_thread_stitch_closes_the_band_on_a_36k_torus() {
     assert_manifold_oriented(&t);
     assert!(t.watertight, "{t:?}");
     assert_eq!(t.genus, Some(1), "{t:?}");
+    // The slit the zip closes comes from slab pieces grown with opposite orientations
+    // (A9 orients a seed on the inner ring towards the centroid): with both the zip and
+    // I16 off the band keeps loops; with I16 alone the fronts merge.
     let off = run(
-        pts,
+        pts.clone(),
         PriorityFrontParams {
             stitch_zip: false,
-            ..p
+            seed_orient_front: false,
+            ..p.clone()
         },
         0,
     );
@@ -547,8 +551,26 @@ fn two_thread_stitch_closes_the_band_on_a_36k_torus() {
     assert_manifold_oriented(&t_off);
     assert!(t_off.n_boundary_loops() > 0, "{t_off:?}");
     // The zip only adds triangles over the slit: no point changes state.
-    assert_eq!(rec.refused, off.refused);
-    assert!(rec.mesh.n_faces() > off.mesh.n_faces());
+    let zip_only = run(
+        pts.clone(),
+        PriorityFrontParams {
+            seed_orient_front: false,
+            ..p.clone()
+        },
+        0,
+    );
+    assert_eq!(zip_only.refused, off.refused);
+    assert!(zip_only.mesh.n_faces() > off.mesh.n_faces());
+    let i16_only = run(
+        pts,
+        PriorityFrontParams {
+            stitch_zip: false,
+            ..p
+        },
+        0,
+    );
+    let t16 = analyze(&i16_only.mesh);
+    assert!(t16.watertight && t16.genus == Some(1), "{t16:?}");
 }
 
 /// I9 zips loops that lie side by side on the surface, not the boundaries of two
