@@ -196,7 +196,8 @@ impl PriorityFront {
         // M9: Free points become Refused; map back to input indices.
         let (mut faces, refused) = output_phase(&grown, &lay.order, n, ctx);
         if p.seed_outward && p.seed_orient_front {
-            let reversed = orient::outward_pieces(input, &mut faces, lay.centroid);
+            let radius = SLAB_ORIENT_RADIUS * r0;
+            let reversed = orient::orient_pieces(input, &mut faces, lay.centroid, radius);
             num(&mut diag, "reversed_faces", reversed as f64);
         }
         if faces.is_empty() && spans_plane(input, &dup) {
@@ -450,8 +451,8 @@ fn grow_slabs_phase(
     Ok(outs)
 }
 
-/// Radius, in R, within which a slab piece's front edge looks for the facing front of
-/// the slabs before it (IMPL-CHOICE I16): the Free band between two slabs is 2 R wide.
+/// Radius, in R, within which a piece's front or rim edge looks for the facing edge of
+/// another piece (IMPL-CHOICE I16): the Free band between two slabs is 2 R wide.
 const SLAB_ORIENT_RADIUS: f64 = 4.0;
 
 /// Joins the slab meshes into one mesher (timed as `stitch`): imports them, sweeps the

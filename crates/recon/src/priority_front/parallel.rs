@@ -17,6 +17,7 @@ use reconbench_geom::method::{MethodError, RunCtx};
 
 use super::grid::{Grid, NONE};
 use super::mesher::{ACCEPTED, Cfg, Mesher, Stats};
+use super::orient::FacingIndex;
 use super::run::DomainCfg;
 
 /// The result of one slab, in global grid indices.
@@ -196,53 +197,14 @@ pub(crate) fn orient_slab_pieces(pts: &[DVec3], outs: &mut [SlabOut], radius: f6
 
 /// Reverses the pieces of `out` that the front edges of `reference` vote against.
 fn orient_pieces(pts: &[DVec3], reference: &[SlabEdge], out: &mut SlabOut, radius: f64) {
-    let cell = |p: DVec3| (p / radius).floor().as_ivec3().to_array();
-    let mid = |a: u32, b: u32| 0.5 * (pts[a as usize] + pts[b as usize]);
-    let mut buckets: std::collections::HashMap<[i32; 3], Vec<u32>> =
-        std::collections::HashMap::new();
-    for (k, &(a, b, ..)) in reference.iter().enumerate() {
-        buckets.entry(cell(mid(a, b))).or_default().push(k as u32);
+    let mut index = FacingIndex::new(radius);
+    for &(a, b, _, n, _) in reference {
+        index.add(pts, a, b, n);
     }
     let mut piece = VertexPieces::new(pts.len(), &out.tris);
     let mut votes: std::collections::BTreeMap<u32, i64> = std::collections::BTreeMap::new();
-    for &(a, b, _, nf, _) in &out.edges {
-        let mf = mid(a, b);
-        let tf = pts[b as usize] - pts[a as usize];
-        let c = cell(mf);
-        let mut best: Option<(f64, u32, bool)> = None;
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let Some(list) = buckets.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for &k in list {
-                        let (ea, eb, _, ne, _) = reference[k as usize];
-                        let d = mid(ea, eb) - mf;
-                        let off = d.dot(nf).abs();
-                        let along = d.reject_from(nf).length();
-                        if d.length() > radius || off > TAN_30 * along || along == 0.0 {
-                            continue;
-                        }
-                        let te = pts[eb as usize] - pts[ea as usize];
-                        // Facing: each edge lies on the other's free side (the side away
-                        // from its own mesh, the same whichever way a piece is oriented),
-                        // which leaves out an edge continuing this one along a rim.
-                        let facing = |from: DVec3, t: DVec3, n: DVec3| {
-                            from.dot(t.cross(n).normalize_or_zero()) > FACING_MIN * from.length()
-                        };
-                        if !facing(d, tf, nf) || !facing(-d, te, ne) {
-                            continue;
-                        }
-                        let consistent = te.dot(tf) < 0.0;
-                        if best.is_none_or(|(bo, bk, _)| off < bo || (off == bo && k < bk)) {
-                            best = Some((off, k, consistent));
-                        }
-                    }
-                }
-            }
-        }
-        if let Some((_, _, consistent)) = best {
+    for &(a, b, _, n, _) in &out.edges {
+        if let Some(consistent) = index.vote(pts, a, b, n) {
             *votes.entry(piece.of(a)).or_default() += if consistent { 1 } else { -1 };
         }
     }
@@ -272,13 +234,6 @@ fn orient_pieces(pts: &[DVec3], reference: &[SlabEdge], out: &mut SlabOut, radiu
         }
     }
 }
-
-/// cos 60°: how far to the free side of an edge a facing edge must lie, as a share of
-/// their distance.
-const FACING_MIN: f64 = 0.5;
-
-/// tan 30°: the largest elevation of a facing front edge above an edge's triangle plane.
-const TAN_30: f64 = 0.577_350_269_189_625_8;
 
 /// Vertex-connected pieces of a triangle list (union-find over the point indices).
 struct VertexPieces {
