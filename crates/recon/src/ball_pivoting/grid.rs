@@ -167,38 +167,32 @@ impl CellGrid {
     }
 }
 
-/// Bits per cell coordinate in the packed sort key of [`sorted_by_cell`].
-const PACK_BITS: u32 = 21;
-
 /// The indices `0..cell.len()` sorted by cell coordinates (lexicographically), then by
-/// index. When every coordinate fits in [`PACK_BITS`] bits (non-negative, as
-/// [`cell_of`] gives them), the three are packed into one `u64` whose order is the
-/// lexicographic one, and 16-byte `(key, index)` pairs are sorted instead of 32-byte
-/// `(cell, index)` ones; the result is the same.
+/// index: a counting sort. The points of each distinct cell are counted in a hash map,
+/// only the distinct cells (several points each) are sorted, and the indices are then
+/// placed in increasing order into their cell's range. The same order as sorting all
+/// `(cell, index)` pairs, for a fraction of the cost.
 fn sorted_by_cell(cell: &[[i64; 3]]) -> Vec<u32> {
-    let fits = cell
-        .iter()
-        .all(|k| k.iter().all(|&c| (0..1i64 << PACK_BITS).contains(&c)));
-    if fits {
-        let pack = |k: &[i64; 3]| {
-            ((k[0] as u64) << (2 * PACK_BITS)) | ((k[1] as u64) << PACK_BITS) | k[2] as u64
-        };
-        let mut keyed: Vec<(u64, u32)> = cell
-            .par_iter()
-            .enumerate()
-            .map(|(i, k)| (pack(k), i as u32))
-            .collect();
-        keyed.par_sort_unstable();
-        keyed.into_iter().map(|(_, i)| i).collect()
-    } else {
-        let mut keyed: Vec<([i64; 3], u32)> = cell
-            .par_iter()
-            .enumerate()
-            .map(|(i, &k)| (k, i as u32))
-            .collect();
-        keyed.par_sort_unstable();
-        keyed.into_iter().map(|(_, i)| i).collect()
+    let mut slot: HashMap<CellKey, u32, foldhash::fast::FixedState> = HashMap::default();
+    for &k in cell {
+        *slot.entry(CellKey(k)).or_insert(0) += 1;
     }
+    let mut distinct: Vec<[i64; 3]> = slot.keys().map(|k| k.0).collect();
+    distinct.sort_unstable();
+    let mut start = 0u32;
+    for k in distinct {
+        let c = slot.get_mut(&CellKey(k)).expect("counted cell");
+        let n = *c;
+        *c = start;
+        start += n;
+    }
+    let mut items = vec![0u32; cell.len()];
+    for (i, &k) in cell.iter().enumerate() {
+        let s = slot.get_mut(&CellKey(k)).expect("counted cell");
+        items[*s as usize] = i as u32;
+        *s += 1;
+    }
+    items
 }
 
 /// The indices of `pos` sorted by grid cell of side `side` (then by index): points
@@ -229,7 +223,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn packed_cell_order_is_the_lexicographic_order() {
+    fn cell_order_is_the_lexicographic_order_then_the_index() {
         let mut x = 0x9e37_79b9_7f4a_7c15u64;
         let mut r = |m: u64| {
             x ^= x << 13;
@@ -237,12 +231,12 @@ mod tests {
             x ^= x << 17;
             (x % m) as i64
         };
-        for wide in [false, true] {
-            let m = if wide { 1 << 40 } else { 7 };
+        // Many points per cell (7^3 cells), and nearly one cell per point.
+        for m in [7, 1 << 40] {
             let cell: Vec<[i64; 3]> = (0..3000).map(|_| [r(m), r(m), r(m)]).collect();
             let mut want: Vec<u32> = (0..cell.len() as u32).collect();
             want.sort_by_key(|&i| (cell[i as usize], i));
-            assert_eq!(sorted_by_cell(&cell), want, "wide {wide}");
+            assert_eq!(sorted_by_cell(&cell), want, "cells per axis {m}");
         }
     }
 

@@ -166,6 +166,16 @@ impl<'a> Complex<'a> {
             w - w.dot(u) * u
         };
         let e1 = perp(p[ref_third as usize]).normalize();
+        // One live triangle besides `j` (the usual case on a surface): the ranking
+        // below returns it whenever its pseudo-angle is finite, i.e. whenever `e1` is
+        // (the points are finite and `u` is a unit vector), and nothing otherwise.
+        let mut others = self
+            .around(e)
+            .iter()
+            .filter(|&&i| i != j && self.alive[i as usize]);
+        if let (Some(&only), None) = (others.next(), others.next()) {
+            return e1.is_finite().then_some(only);
+        }
         let e2 = u.cross(e1);
         buf.clear();
         let mut best = f64::INFINITY;
