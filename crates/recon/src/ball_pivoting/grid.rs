@@ -3,17 +3,41 @@
 //! It gives the neighbour rows of a pass without a tree walk or sorting the results.
 
 use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-type CellMap = HashMap<[i64; 3], (u32, u32), foldhash::fast::FixedState>;
+/// Integer cell coordinates as a hash key. Equality is on the three coordinates; the
+/// hash feeds one mixed `u64` to the hasher instead of the 24 bytes of the array (which
+/// `foldhash` hashes with its long-input path): the 27 look-ups per run of points are
+/// a large share of the neighbour rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct CellKey([i64; 3]);
+
+impl Hash for CellKey {
+    #[inline]
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        let [x, y, z] = self.0.map(|c| c as u64);
+        // Odd multipliers: distinct small cells rarely share the mixed value, and a
+        // collision only costs a probe (equality decides).
+        state.write_u64(
+            x.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                ^ y.wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+                ^ z.wrapping_mul(0x1656_67B1_9E37_79F9),
+        );
+    }
+}
+
+type CellMap = HashMap<CellKey, (u32, u32), foldhash::fast::FixedState>;
 
 /// Points bucketed by cell.
 #[derive(Debug)]
 pub(crate) struct CellGrid {
     origin: DVec3,
     inv: f64,
+    /// `1 / inv`, the cell side.
+    side: f64,
     /// Cell -> `(start, len)` into `items`.
     cells: CellMap,
     /// Point ids sorted by cell, then by id.
@@ -27,27 +51,22 @@ impl CellGrid {
             .iter()
             .fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
         let inv = 1.0 / side;
-        let mut keyed: Vec<([i64; 3], u32)> = pos
-            .par_iter()
-            .enumerate()
-            .map(|(i, &p)| (cell_of(origin, inv, p), i as u32))
-            .collect();
-        keyed.par_sort_unstable();
+        let cell: Vec<[i64; 3]> = pos.par_iter().map(|&p| cell_of(origin, inv, p)).collect();
+        let items = sorted_by_cell(&cell);
         let mut cells = CellMap::default();
-        let mut items = Vec::with_capacity(keyed.len());
         let mut i = 0;
-        while i < keyed.len() {
-            let k = keyed[i].0;
-            let start = items.len() as u32;
-            while i < keyed.len() && keyed[i].0 == k {
-                items.push(keyed[i].1);
+        while i < items.len() {
+            let k = cell[items[i] as usize];
+            let start = i as u32;
+            while i < items.len() && cell[items[i] as usize] == k {
                 i += 1;
             }
-            cells.insert(k, (start, items.len() as u32 - start));
+            cells.insert(CellKey(k), (start, i as u32 - start));
         }
         Self {
             origin,
             inv,
+            side: 1.0 / inv,
             cells,
             items,
         }
@@ -56,7 +75,7 @@ impl CellGrid {
     /// Appends to `out` every point of `pos` within distance `sqrt(r2)` of `p` (`r2` at
     /// most the squared cell side), in cell order.
     pub fn near_into(&self, pos: &[DVec3], p: DVec3, r2: f64, out: &mut Vec<u32>) {
-        let mut spans = [(0u32, 0u32, [0i64; 3]); 27];
+        let mut spans = [(0u32, 0u32, DVec3::ZERO); 27];
         let n = self.spans_around(cell_of(self.origin, self.inv, p), &mut spans);
         self.scan(pos, p, r2, &spans[..n], out);
     }
@@ -81,7 +100,7 @@ impl CellGrid {
         out: &mut Vec<u32>,
         lens: &mut Vec<u32>,
     ) {
-        let mut spans = [(0u32, 0u32, [0i64; 3]); 27];
+        let mut spans = [(0u32, 0u32, DVec3::ZERO); 27];
         let mut n = 0;
         let mut cur = None;
         for &i in pts {
@@ -97,8 +116,9 @@ impl CellGrid {
         }
     }
 
-    /// The occupied cells among the 27 around cell `c`: `(start, len, cell)`.
-    fn spans_around(&self, c: [i64; 3], spans: &mut [(u32, u32, [i64; 3]); 27]) -> usize {
+    /// The occupied cells among the 27 around cell `c`: `(start, len, lowest corner)`.
+    /// The corner is computed here, once per run of points in one cell, not per point.
+    fn spans_around(&self, c: [i64; 3], spans: &mut [(u32, u32, DVec3); 27]) -> usize {
         let mut n = 0;
         for dz in -1..=1i64 {
             for dy in -1..=1i64 {
@@ -108,8 +128,10 @@ impl CellGrid {
                         c[1].saturating_add(dy),
                         c[2].saturating_add(dz),
                     ];
-                    if let Some(&(s, l)) = self.cells.get(&k) {
-                        spans[n] = (s, l, k);
+                    if let Some(&(s, l)) = self.cells.get(&CellKey(k)) {
+                        let lo = self.origin
+                            + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * self.side;
+                        spans[n] = (s, l, lo);
                         n += 1;
                     }
                 }
@@ -126,12 +148,11 @@ impl CellGrid {
         pos: &[DVec3],
         p: DVec3,
         r2: f64,
-        spans: &[(u32, u32, [i64; 3])],
+        spans: &[(u32, u32, DVec3)],
         out: &mut Vec<u32>,
     ) {
-        let side = 1.0 / self.inv;
-        for &(s, l, k) in spans {
-            let lo = self.origin + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * side;
+        let side = self.side;
+        for &(s, l, lo) in spans {
             let gap = (lo - p).max(p - (lo + side)).max(DVec3::ZERO);
             // A margin of a few ulps: the box test only skips, never decides.
             if gap.length_squared() > r2 * (1.0 + 1e-9) {
@@ -146,6 +167,34 @@ impl CellGrid {
     }
 }
 
+/// The indices `0..cell.len()` sorted by cell coordinates (lexicographically), then by
+/// index: a counting sort. The points of each distinct cell are counted in a hash map,
+/// only the distinct cells (several points each) are sorted, and the indices are then
+/// placed in increasing order into their cell's range. The same order as sorting all
+/// `(cell, index)` pairs, for a fraction of the cost.
+fn sorted_by_cell(cell: &[[i64; 3]]) -> Vec<u32> {
+    let mut slot: HashMap<CellKey, u32, foldhash::fast::FixedState> = HashMap::default();
+    for &k in cell {
+        *slot.entry(CellKey(k)).or_insert(0) += 1;
+    }
+    let mut distinct: Vec<[i64; 3]> = slot.keys().map(|k| k.0).collect();
+    distinct.sort_unstable();
+    let mut start = 0u32;
+    for k in distinct {
+        let c = slot.get_mut(&CellKey(k)).expect("counted cell");
+        let n = *c;
+        *c = start;
+        start += n;
+    }
+    let mut items = vec![0u32; cell.len()];
+    for (i, &k) in cell.iter().enumerate() {
+        let s = slot.get_mut(&CellKey(k)).expect("counted cell");
+        items[*s as usize] = i as u32;
+        *s += 1;
+    }
+    items
+}
+
 /// The indices of `pos` sorted by grid cell of side `side` (then by index): points
 /// close in space end up close in the order, which keeps the mesher's neighbour reads
 /// in cache.
@@ -156,14 +205,40 @@ pub(crate) fn spatial_order(pos: &[DVec3], side: f64) -> Vec<u32> {
 /// Integer cell coordinates (the float-to-integer casts saturate, so absurd ratios of
 /// extent to cell side lump points together instead of failing; rows stay exact
 /// because every candidate is filtered by distance).
+///
+/// Only the grid's own points are located (`pos` of [`CellGrid::new`]), never below
+/// `origin`, their componentwise minimum: the scaled offset is non-negative, so the
+/// cast's truncation is the floor (without the libm `floor` call, which the compiler
+/// does not inline on the baseline x86-64 target).
 #[inline]
 fn cell_of(origin: DVec3, inv: f64, p: DVec3) -> [i64; 3] {
-    ((p - origin) * inv).floor().to_array().map(|x| x as i64)
+    ((p - origin) * inv).to_array().map(|x| {
+        debug_assert!(x >= 0.0, "a point below the grid's origin");
+        x as i64
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cell_order_is_the_lexicographic_order_then_the_index() {
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut r = |m: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x % m) as i64
+        };
+        // Many points per cell (7^3 cells), and nearly one cell per point.
+        for m in [7, 1 << 40] {
+            let cell: Vec<[i64; 3]> = (0..3000).map(|_| [r(m), r(m), r(m)]).collect();
+            let mut want: Vec<u32> = (0..cell.len() as u32).collect();
+            want.sort_by_key(|&i| (cell[i as usize], i));
+            assert_eq!(sorted_by_cell(&cell), want, "cells per axis {m}");
+        }
+    }
 
     #[test]
     fn rows_match_brute_force() {

@@ -3,8 +3,10 @@
 //! line, normals consistently oriented; plus the deduplicated working set and its mean
 //! nearest-neighbour spacing.
 
+use std::collections::HashSet;
+use std::hash::{Hash, Hasher};
+
 use glam::DVec3;
-use rayon::prelude::*;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::MethodError;
 use reconbench_geom::spatial::knn_self_table;
@@ -26,6 +28,29 @@ pub(crate) struct Prepared {
     pub spacing: f64,
     /// Share of distinct points whose nearest neighbour's normal points the other way.
     pub flipped_share: f64,
+}
+
+/// The bit pattern of a position (with `-0` read as `0`), as a hash key: equal exactly
+/// when the positions are, hashed as one mixed `u64` (cheaper than the 24 bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Bits([u64; 3]);
+
+impl Bits {
+    #[inline]
+    fn of(p: DVec3) -> Self {
+        Bits((p + DVec3::ZERO).to_array().map(f64::to_bits))
+    }
+}
+
+impl Hash for Bits {
+    #[inline]
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        let [x, y, z] = self.0;
+        state.write_u64(
+            x ^ y.rotate_left(21).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                ^ z.rotate_left(42).wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
+        );
+    }
 }
 
 fn invalid(name: &str, what: String) -> MethodError {
@@ -55,17 +80,16 @@ pub(crate) fn prepare(
         return Err(invalid(name, format!("needs at least 3 points, got {n}")));
     }
     // Exact duplicates (bit patterns, -0 == 0): the first occurrence represents them.
-    let key = |p: DVec3| (p + DVec3::ZERO).to_array().map(f64::to_bits);
-    let mut order: Vec<u32> = (0..n as u32).collect();
+    // One pass in input order with a hash set of the bit patterns gives the first
+    // occurrences already in increasing order (a sort by pattern cost several times
+    // more on 100k points).
     let pts = cloud.positions();
-    order.par_sort_unstable_by_key(|&i| (key(pts[i as usize]), i));
-    let mut ids = Vec::with_capacity(n);
-    for (j, &i) in order.iter().enumerate() {
-        if j == 0 || key(pts[order[j - 1] as usize]) != key(pts[i as usize]) {
-            ids.push(i);
-        }
-    }
-    ids.par_sort_unstable();
+    let mut seen: HashSet<Bits, foldhash::fast::FixedState> =
+        HashSet::with_capacity_and_hasher(n, Default::default());
+    let ids: Vec<u32> = (0..n as u32)
+        .filter(|&i| seen.insert(Bits::of(pts[i as usize])))
+        .collect();
+    drop(seen);
     let duplicates = n - ids.len();
     if ids.len() < 3 {
         return Err(invalid(

@@ -91,9 +91,9 @@ pub(crate) struct Mesher<'a> {
     /// Diagnostics counts.
     pub counts: Counts,
     rho: f64,
-    /// Reused buffer of pivot contacts: (angle, candidate, cos, sin) with the ball
+    /// Reused buffer of pivot contacts: (angle, rank, candidate, cos, sin) with the ball
     /// centre at `m + R (cos e1 + sin e2) / (cos² + sin²)^½` on the pivot circle.
-    cand: Vec<(f64, u32, f64, f64)>,
+    cand: Vec<(f64, u32, u32, f64, f64)>,
 }
 
 #[inline]
@@ -370,7 +370,7 @@ impl<'a> Mesher<'a> {
             if t < 1e-9 && (pk - frame.m).dot(w) > 0.0 {
                 continue;
             }
-            cand.push((t, k, c, s));
+            cand.push((t, self.rank[k as usize], k, c, s));
         }
         let mut out = None;
         let mut hit = false;
@@ -380,9 +380,9 @@ impl<'a> Mesher<'a> {
             cand[x]
                 .0
                 .total_cmp(&cand[y].0)
-                .then(self.rank[cand[x].1 as usize].cmp(&self.rank[cand[y].1 as usize]))
+                .then(cand[x].1.cmp(&cand[y].1))
         }) {
-            let (_, k, c, s) = cand.swap_remove(best);
+            let (_, _, k, c, s) = cand.swap_remove(best);
             let pk = self.pos[k as usize];
             let centre = frame.centre(c, s, rad);
             // Numerical safety: the first hit's ball must be empty; otherwise try the next.

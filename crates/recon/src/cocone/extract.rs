@@ -5,7 +5,6 @@
 use std::collections::VecDeque;
 
 use glam::DVec3;
-use rayon::prelude::*;
 use reconbench_delaunay::{Delaunay, NO_TET};
 
 use super::poles::{apex, outward_normal};
@@ -54,36 +53,49 @@ impl<'a> Complex<'a> {
             .filter(|&f| keep[f as usize])
             .collect();
         let tri: Vec<[u32; 3]> = facet.iter().map(|&f| facets[f as usize].v).collect();
-        // (edge key, candidate << 2 | opposite corner), sorted by key.
-        let mut pairs: Vec<(u64, u32)> = tri
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(j, t)| {
-                let j = j as u32;
-                [
-                    (key(t[1], t[2]), j << 2),
-                    (key(t[0], t[2]), (j << 2) | 1),
-                    (key(t[0], t[1]), (j << 2) | 2),
-                ]
-            })
-            .collect();
-        pairs.par_sort_unstable();
+        // (upper end, candidate << 2 | opposite corner) of every edge, bucketed by the
+        // lower end (the triples are sorted, so edge k of `t` has lower end
+        // `t[usize::from(k == 0)]`) and each bucket sorted: the order of sorting all
+        // (edge key, candidate << 2 | corner) pairs, without a comparison sort of them.
+        let nv = dt.n_vertices();
+        let lower = |t: &[u32; 3], k: usize| t[usize::from(k == 0)];
+        let upper = |t: &[u32; 3], k: usize| t[if k == 2 { 1 } else { 2 }];
+        let mut off = vec![0u32; nv + 1];
+        for t in &tri {
+            for k in 0..3 {
+                off[lower(t, k) as usize + 1] += 1;
+            }
+        }
+        for i in 0..nv {
+            off[i + 1] += off[i];
+        }
+        let mut fill = off.clone();
+        let mut pairs = vec![(0u32, 0u32); off[nv] as usize];
+        for (j, t) in tri.iter().enumerate() {
+            for k in 0..3 {
+                let a = lower(t, k) as usize;
+                pairs[fill[a] as usize] = (upper(t, k), ((j as u32) << 2) | k as u32);
+                fill[a] += 1;
+            }
+        }
+        drop(fill);
         let mut tri_edges = vec![[NONE; 3]; tri.len()];
         let mut edge_v = Vec::new();
         let mut edge_off = vec![0u32];
         let mut edge_items = Vec::with_capacity(pairs.len());
-        let mut i = 0;
-        while i < pairs.len() {
-            let k = pairs[i].0;
-            let e = edge_v.len() as u32;
-            edge_v.push([(k >> 32) as u32, k as u32]);
-            while i < pairs.len() && pairs[i].0 == k {
-                let (j, c) = (pairs[i].1 >> 2, pairs[i].1 & 3);
-                tri_edges[j as usize][c as usize] = e;
-                edge_items.push(j);
-                i += 1;
+        for a in 0..nv {
+            let row = &mut pairs[off[a] as usize..off[a + 1] as usize];
+            row.sort_unstable();
+            for run in row.chunk_by(|x, y| x.0 == y.0) {
+                let e = edge_v.len() as u32;
+                edge_v.push([a as u32, run[0].0]);
+                for &(_, tag) in run {
+                    let (j, c) = (tag >> 2, tag & 3);
+                    tri_edges[j as usize][c as usize] = e;
+                    edge_items.push(j);
+                }
+                edge_off.push(edge_items.len() as u32);
             }
-            edge_off.push(edge_items.len() as u32);
         }
         let alive = vec![true; tri.len()];
         Complex {
@@ -154,6 +166,16 @@ impl<'a> Complex<'a> {
             w - w.dot(u) * u
         };
         let e1 = perp(p[ref_third as usize]).normalize();
+        // One live triangle besides `j` (the usual case on a surface): the ranking
+        // below returns it whenever its pseudo-angle is finite, i.e. whenever `e1` is
+        // (the points are finite and `u` is a unit vector), and nothing otherwise.
+        let mut others = self
+            .around(e)
+            .iter()
+            .filter(|&&i| i != j && self.alive[i as usize]);
+        if let (Some(&only), None) = (others.next(), others.next()) {
+            return e1.is_finite().then_some(only);
+        }
         let e2 = u.cross(e1);
         buf.clear();
         let mut best = f64::INFINITY;
@@ -190,6 +212,9 @@ impl<'a> Complex<'a> {
     /// with a single triangle is sharp too (the paper's rule for closed surfaces).
     /// Returns the number of triangles removed.
     pub fn prune(&mut self, sharp: f64, dangling: bool) -> usize {
+        // cos(2π − sharp): two triangles leave a gap above `sharp` when the angle between
+        // them is below 2π − sharp, i.e. its cosine is above this.
+        let cos_sharp = sharp.cos();
         let mut queue: Vec<u32> = (0..self.edge_v.len() as u32).collect();
         let mut queued = vec![true; self.edge_v.len()];
         let mut buf = Vec::new();
@@ -204,6 +229,17 @@ impl<'a> Complex<'a> {
             let is_sharp = match live {
                 0 => false,
                 1 => dangling,
+                2 => {
+                    let [x, y] = self.edge_v[e as usize];
+                    let mut two = self.around(e).iter().filter(|&&j| self.alive[j as usize]);
+                    let (j1, j2) = (*two.next().expect("live"), *two.next().expect("live"));
+                    let (r, k) = (self.third(j1, e), self.third(j2, e));
+                    match self.wedge_cos(x, y, r, k) {
+                        // Clear of the threshold: the wedge angle alone decides.
+                        Some(c) if (c - cos_sharp).abs() > 1e-9 => c > cos_sharp,
+                        _ => self.sharp_by_angles(x, y, r, e, sharp, &mut buf),
+                    }
+                }
                 _ => {
                     let [x, y] = self.edge_v[e as usize];
                     let first = *self
@@ -211,13 +247,7 @@ impl<'a> Complex<'a> {
                         .iter()
                         .find(|&&j| self.alive[j as usize])
                         .expect("live");
-                    self.angles(x, y, self.third(first, e), e, &mut buf);
-                    buf.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-                    let mut gap = std::f64::consts::TAU - buf[buf.len() - 1].0 + buf[0].0;
-                    for w in buf.windows(2) {
-                        gap = gap.max(w[1].0 - w[0].0);
-                    }
-                    gap > sharp
+                    self.sharp_by_angles(x, y, self.third(first, e), e, sharp, &mut buf)
                 }
             };
             if !is_sharp {
@@ -241,6 +271,47 @@ impl<'a> Complex<'a> {
             }
         }
         removed
+    }
+
+    /// Whether the live triangles around edge `x→y` leave a gap above `sharp` radians
+    /// between two consecutive ones, from their exact angles ([`Self::angles`]).
+    fn sharp_by_angles(
+        &self,
+        x: u32,
+        y: u32,
+        ref_third: u32,
+        e: u32,
+        sharp: f64,
+        buf: &mut Vec<(f64, u32)>,
+    ) -> bool {
+        self.angles(x, y, ref_third, e, buf);
+        buf.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+        let mut gap = std::f64::consts::TAU - buf[buf.len() - 1].0 + buf[0].0;
+        for w in buf.windows(2) {
+            gap = gap.max(w[1].0 - w[0].0);
+        }
+        gap > sharp
+    }
+
+    /// Cosine of the angle about edge `x→y` between the half-planes of `r` and `k`,
+    /// from the same projections as [`Self::angles`] (there `atan2` of `(s, c)` below);
+    /// `None` when a projection vanishes. Two triangles leave a gap of 2π minus this
+    /// angle, up to rounding far below the `1e-9` margin `prune` keeps, so the
+    /// decision is the one the `atan2` angles give, without the two `atan2` calls.
+    fn wedge_cos(&self, x: u32, y: u32, r: u32, k: u32) -> Option<f64> {
+        let p = self.dt.vertices();
+        let (px, u) = (p[x as usize], (p[y as usize] - p[x as usize]).normalize());
+        let perp = |q: DVec3| {
+            let w = q - px;
+            w - w.dot(u) * u
+        };
+        let e1 = perp(p[r as usize]).normalize();
+        let e2 = u.cross(e1);
+        let w = perp(p[k as usize]);
+        let (c, s) = (w.dot(e1), w.dot(e2));
+        let len = (c * c + s * s).sqrt();
+        let cos = c / len;
+        cos.is_finite().then_some(cos)
     }
 
     /// Edge-connected components of the live triangles, numbered in order of their
@@ -401,11 +472,6 @@ impl<'a> Complex<'a> {
         placed[j as usize] = true;
         true
     }
-}
-
-fn key(a: u32, b: u32) -> u64 {
-    let (a, b) = if a < b { (a, b) } else { (b, a) };
-    ((a as u64) << 32) | b as u64
 }
 
 /// The triple `v` ordered so that its normal points along `dir`.

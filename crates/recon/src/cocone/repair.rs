@@ -5,7 +5,6 @@
 //! tetrahedra there is relabelled, so that the two regions no longer touch in an edge or
 //! a point. The output stays the boundary of a union of tetrahedra, so it stays closed.
 
-use rayon::prelude::*;
 use reconbench_delaunay::{Delaunay, INFINITE};
 
 use super::tight::{good_samples, interface};
@@ -179,28 +178,7 @@ fn smallest_flippable(g: &[(bool, Vec<u32>)], nt: u32) -> Option<&(bool, Vec<u32
 /// Non-manifold edges (more than two triangles) and vertices whose triangles are not one
 /// closed fan, of a closed triangle set.
 pub fn defects(nv: usize, tris: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
-    let mut e: Vec<[u32; 2]> = tris
-        .iter()
-        .flat_map(|t| {
-            [0, 1, 2].map(|k| {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                [a.min(b), a.max(b)]
-            })
-        })
-        .collect();
-    e.par_sort_unstable();
-    let mut bad_edges = Vec::new();
-    let mut i = 0;
-    while i < e.len() {
-        let mut j = i;
-        while j < e.len() && e[j] == e[i] {
-            j += 1;
-        }
-        if j - i > 2 {
-            bad_edges.push(e[i]);
-        }
-        i = j;
-    }
+    let bad_edges = crowded_edges(nv, tris);
     let good = good_samples(nv, tris);
     let mut used = vec![false; nv];
     for t in tris {
@@ -213,6 +191,49 @@ pub fn defects(nv: usize, tris: &[[u32; 3]]) -> (Vec<[u32; 2]>, Vec<u32>) {
         .filter(|&v| used[v as usize] && !good[v as usize] && !on_bad.contains(&v))
         .collect();
     (bad_edges, bad_vertices)
+}
+
+/// The edges `[a, b]` (`a < b`) of more than two triangles of `tris`, in increasing
+/// order. The edges are bucketed by their lower end (a counting sort) and each short
+/// row is sorted on its own: the same order as sorting all `3 · tris` edges, which was
+/// the largest sort of the repair check.
+fn crowded_edges(nv: usize, tris: &[[u32; 3]]) -> Vec<[u32; 2]> {
+    let ends = |t: &[u32; 3], k: usize| {
+        let (a, b) = (t[k], t[(k + 1) % 3]);
+        (a.min(b), a.max(b))
+    };
+    let mut off = vec![0u32; nv + 1];
+    for t in tris {
+        for k in 0..3 {
+            off[ends(t, k).0 as usize + 1] += 1;
+        }
+    }
+    for i in 0..nv {
+        off[i + 1] += off[i];
+    }
+    let mut fill = off.clone();
+    let mut upper = vec![0u32; off[nv] as usize];
+    for t in tris {
+        for k in 0..3 {
+            let (a, b) = ends(t, k);
+            upper[fill[a as usize] as usize] = b;
+            fill[a as usize] += 1;
+        }
+    }
+    let mut bad = Vec::new();
+    for a in 0..nv {
+        let row = &mut upper[off[a] as usize..off[a + 1] as usize];
+        if row.len() < 3 {
+            continue;
+        }
+        row.sort_unstable();
+        for run in row.chunk_by(|x, y| x == y) {
+            if run.len() > 2 {
+                bad.push([a as u32, run[0]]);
+            }
+        }
+    }
+    bad
 }
 
 /// Relabels every face-connected region of one label with fewer than `share` times the
