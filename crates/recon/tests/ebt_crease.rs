@@ -5,9 +5,9 @@
 //! (`link_edge = 1`) leaves more of them unmeshed.
 
 use glam::DVec3;
+use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Describe, Diagnostic, Reconstruction, Reconstructor, RunCtx};
 use reconbench_geom::topology::MeshTopology;
-use reconbench_geom::PointCloud;
 use reconbench_recon::ebt::{Ebt, EbtParams};
 
 /// Points of the ruled surface over the profile curve `prof` (arc length -> (x, z), of
@@ -33,7 +33,11 @@ fn ruled(len: f64, h: f64, s: f64, prof: impl Fn(f64) -> (f64, f64)) -> Vec<DVec
 /// z = 10 (a convex crease seen from the outside normal -x, +z).
 fn right_angle() -> Vec<DVec3> {
     ruled(20.0, 10.0, 0.2, |t| {
-        if t < 10.0 { (t - 10.0, 0.0) } else { (0.0, t - 10.0) }
+        if t < 10.0 {
+            (t - 10.0, 0.0)
+        } else {
+            (0.0, t - 10.0)
+        }
     })
 }
 
@@ -104,7 +108,10 @@ fn growth_crosses_a_right_angle_crease() {
     // (0.49 when written).
     let (lit, lit_share) = run(right_angle(), 1.0, 1.0);
     assert_disc(&lit);
-    assert!(lit_share > share + 0.1, "literal {lit_share}, deviation {share}");
+    assert!(
+        lit_share > share + 0.1,
+        "literal {lit_share}, deviation {share}"
+    );
 }
 
 #[test]
@@ -116,5 +123,8 @@ fn growth_crosses_the_ridge_creases() {
     // The literal growth stalls near its seed here (0.99 unmeshed when written).
     let (lit, lit_share) = run(ridge(), 2.0, 1.0);
     assert_disc(&lit);
-    assert!(lit_share > share + 0.1, "literal {lit_share}, deviation {share}");
+    assert!(
+        lit_share > share + 0.1,
+        "literal {lit_share}, deviation {share}"
+    );
 }

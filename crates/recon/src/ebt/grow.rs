@@ -212,7 +212,13 @@ impl<'a> Front<'a> {
     /// G3: tries to link free point `qi` to the visible boundary; true when it joined
     /// (else the rule that stopped it is kept in `reason`).
     fn insert(&mut self, qi: u32, ear_filling: bool) -> bool {
-        match self.link(qi, ear_filling) {
+        // The deviation (link_edge > Omega) is a fallback: links within Omega first, so
+        // a long link never takes the place of short ones.
+        let mut res = self.link(qi, ear_filling, self.omega);
+        if res.is_err() && self.link_edge > self.omega {
+            res = self.link(qi, ear_filling, self.link_edge);
+        }
+        match res {
             Ok(()) => true,
             Err(r) => {
                 self.reason[qi as usize] = r;
@@ -221,11 +227,10 @@ impl<'a> Front<'a> {
         }
     }
 
-    /// [`Self::insert`]; `Err` names the rule that stopped the point.
-    fn link(&mut self, qi: u32, ear_filling: bool) -> Result<(), u8> {
+    /// [`Self::insert`] with facet edges up to `om`; `Err` names the rule that stopped
+    /// the point.
+    fn link(&mut self, qi: u32, ear_filling: bool, om: f64) -> Result<(), u8> {
         let q = self.p[qi as usize];
-        // Omega, or the longer link edge of the deviation.
-        let om = self.link_edge;
         // Boundary edges with an endpoint within 2 Omega can cross a new facet.
         self.gather(q, 2.0 * om);
         // ASSUMPTION E13: candidate edges have both endpoints within Omega of q (within
@@ -335,7 +340,8 @@ impl<'a> Front<'a> {
                 && min_angle(pa, q, pb) > self.min_angle
                 && self.within_bound_disc([a, qi, b])
                 && nf.dot(self.normals[self.bface[a as usize] as usize]) > 0.0
-                && self.empty_triangle(&pr, [a, qi, b]);
+                && self.empty_triangle(&pr, [a, qi, b])
+                && (self.short(a, qi, b) || !self.covers_free_point(&pr, [a, qi, b]));
             self.ok.push(good);
         }
         self.seg = seg;
@@ -346,7 +352,9 @@ impl<'a> Front<'a> {
                 R_CROSSING
             } else if min_angle(pa, q, pb) <= self.min_angle {
                 R_ANGLE
-            } else if !self.within_bound_disc([a, qi, b]) {
+            } else if !self.within_bound_disc([a, qi, b])
+                || !(self.short(a, qi, b) || !self.covers_free_point(&pr, [a, qi, b]))
+            {
                 R_NO_EDGE
             } else if face_cross(pa, q, pb).dot(self.normals[self.bface[a as usize] as usize])
                 <= 0.0
@@ -584,6 +592,12 @@ impl<'a> Front<'a> {
             *x = true;
         }
         true
+    }
+
+    /// Whether every edge of the facet `a b c` is within Omega (Rule 1).
+    fn short(&self, a: u32, b: u32, c: u32) -> bool {
+        let l = |x: u32, y: u32| (self.p[x as usize] - self.p[y as usize]).length();
+        l(a, b).max(l(b, c)).max(l(c, a)) <= self.omega
     }
 
     /// Whether the facet `f` fits in a disc of radius Omega / sqrt 2 (a crack-closing
