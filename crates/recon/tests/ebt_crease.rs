@@ -6,7 +6,9 @@
 
 use glam::DVec3;
 use reconbench_geom::PointCloud;
-use reconbench_geom::method::{Describe, Diagnostic, Reconstruction, Reconstructor, RunCtx};
+use reconbench_geom::method::{
+    Describe, Diagnostic, MethodError, Reconstruction, Reconstructor, RunCtx,
+};
 use reconbench_geom::topology::MeshTopology;
 use reconbench_recon::ebt::{Ebt, EbtParams};
 
@@ -127,4 +129,20 @@ fn growth_crosses_the_ridge_creases() {
         lit_share > share + 0.1,
         "literal {lit_share}, deviation {share}"
     );
+}
+
+#[test]
+fn link_edge_outside_its_range_is_refused() {
+    let c = PointCloud::new(right_angle()).unwrap();
+    for bad in [0.5, 1.5, f64::NAN] {
+        let p = EbtParams {
+            link_edge: bad,
+            ..EbtParams::default()
+        };
+        let res = Ebt::from_params(p).and_then(|m| m.reconstruct(&c, &mut RunCtx::new(7)));
+        match res {
+            Err(MethodError::InvalidParameter { name, .. }) => assert_eq!(name, "link_edge"),
+            other => panic!("link_edge = {bad}: {:?}", other.map(|_| ())),
+        }
+    }
 }
