@@ -341,7 +341,7 @@ impl<'a> Front<'a> {
                 && self.within_bound_disc([a, qi, b])
                 && nf.dot(self.normals[self.bface[a as usize] as usize]) > 0.0
                 && self.empty_triangle(&pr, [a, qi, b])
-                && (self.short(a, qi, b) || !self.covers_free_point(&pr, [a, qi, b]));
+                && !self.long_over_free(&pr, [a, qi, b]);
             self.ok.push(good);
         }
         self.seg = seg;
@@ -352,9 +352,7 @@ impl<'a> Front<'a> {
                 R_CROSSING
             } else if min_angle(pa, q, pb) <= self.min_angle {
                 R_ANGLE
-            } else if !self.within_bound_disc([a, qi, b])
-                || !(self.short(a, qi, b) || !self.covers_free_point(&pr, [a, qi, b]))
-            {
+            } else if !self.within_bound_disc([a, qi, b]) || self.long_over_free(&pr, [a, qi, b]) {
                 R_NO_EDGE
             } else if face_cross(pa, q, pb).dot(self.normals[self.bface[a as usize] as usize])
                 <= 0.0
@@ -594,10 +592,13 @@ impl<'a> Front<'a> {
         true
     }
 
-    /// Whether every edge of the facet `a b c` is within Omega (Rule 1).
-    fn short(&self, a: u32, b: u32, c: u32) -> bool {
+    /// Whether the facet `t` has an edge longer than Omega (a long link, deviation
+    /// `link_edge`) and covers a point not yet meshed (projection `pr`): such a link
+    /// would skip the point.
+    fn long_over_free(&self, pr: &Proj, t: [u32; 3]) -> bool {
         let l = |x: u32, y: u32| (self.p[x as usize] - self.p[y as usize]).length();
-        l(a, b).max(l(b, c)).max(l(c, a)) <= self.omega
+        let longest = l(t[0], t[1]).max(l(t[1], t[2])).max(l(t[2], t[0]));
+        longest > self.omega && self.covers_free_point(pr, t)
     }
 
     /// Whether the facet `f` fits in a disc of radius Omega / sqrt 2 (a crack-closing
