@@ -89,6 +89,24 @@ fn bench(c: &mut Criterion) {
             ebt.reconstruct(&cloud, &mut ctx).expect("reconstruction")
         })
     });
+    // Same-run reference on the loaded machine: the literal growth (links within
+    // Omega, no crack closing) on the same cloud.
+    let literal = Ebt::from_params(EbtParams {
+        epsilon: 0.4 / diag,
+        deviation: false,
+        link_edge: 1.0,
+        crack_closing: 0.0,
+        ..EbtParams::default()
+    })
+    .expect("valid params");
+    g.bench_function(format!("mask_scan_{}_literal", cloud.len()), |b| {
+        b.iter(|| {
+            let mut ctx = RunCtx::new(1);
+            literal
+                .reconstruct(&cloud, &mut ctx)
+                .expect("reconstruction")
+        })
+    });
     g.finish();
 }
 

@@ -243,11 +243,13 @@ fn sphere_cap_mesh_obeys_the_rules_and_has_one_boundary_loop() {
         );
     }
     assert!(num(&r, "crack_facets") > 0.0);
-    // The literal growth keeps every edge within Omega.
+    // The literal growth (no crack closing, links within Omega) keeps every edge
+    // within Omega.
     let lit = run(
         &c,
         EbtParams {
             crack_closing: 0.0,
+            link_edge: 1.0,
             ..params_abs(&c, 0.05)
         },
     );
@@ -326,6 +328,7 @@ fn sphere_deviation_stays_within_epsilon() {
     // excess: points over a crack are up to B from the mesh, the mesh stays one disc.
     let lit = EbtParams {
         crack_closing: 0.0,
+        link_edge: 1.0,
         ..params_abs(&c, eps)
     };
     let r = run(&c, lit);

@@ -34,6 +34,21 @@ const SEED_TRIES: usize = 64;
 /// Largest loop (vertices) a crack bridge may split off and fill.
 const BRIDGE_LOOP: usize = 24;
 
+/// Why a point could not link (its last failed try), for the diagnostics
+/// `unmeshed_<reason>`: see [`REASONS`].
+pub const REASONS: [&str; 9] = [
+    "no_edge", "on_edge", "no_plane", "hidden", "crossing", "angle", "fold", "covered", "far",
+];
+const R_NO_EDGE: u8 = 0;
+const R_ON_EDGE: u8 = 1;
+const R_NO_PLANE: u8 = 2;
+const R_HIDDEN: u8 = 3;
+const R_CROSSING: u8 = 4;
+const R_ANGLE: u8 = 5;
+const R_FOLD: u8 = 6;
+const R_COVERED: u8 = 7;
+const R_FAR: u8 = 8;
+
 /// Insertions between two calls of the cancellation check.
 const CHECK_EVERY: usize = 2048;
 
@@ -56,6 +71,9 @@ pub struct GrowOpts {
     /// Crack closing after the growth (a named deviation): the longest closing edge, or
     /// `None` for the literal growth.
     pub crack_edge: Option<f64>,
+    /// Longest edge of a growth facet (a named deviation above Omega: the facet must
+    /// then fit in a disc of radius Omega / sqrt 2); Omega = Rule 1 and E13 literally.
+    pub link_edge: f64,
 }
 
 /// The grown mesh over the points given to [`grow`].
@@ -77,6 +95,8 @@ pub struct Grown {
     pub crack_facets: usize,
     /// Per facet: added by crack closing.
     pub crack_face: Vec<bool>,
+    /// Points left unmeshed, by the rule that stopped their last try (see [`REASONS`]).
+    pub unmeshed_by_reason: [usize; 9],
 }
 
 /// The point of `points` nearest `x` (ties to the lower index): a user seed that
@@ -95,6 +115,8 @@ pub fn default_seed_near(points: &[DVec3], x: DVec3) -> u32 {
 struct Front<'a> {
     p: &'a [DVec3],
     omega: f64,
+    /// Longest edge of a growth facet ([`GrowOpts::link_edge`]).
+    link_edge: f64,
     min_angle: f64,
     tj: f64,
     grid: Grid,
@@ -126,6 +148,8 @@ struct Front<'a> {
     edge_log: Vec<u64>,
     /// Whether a bridge is tentative.
     logging: bool,
+    /// Per point: the rule that stopped its last failed try (see [`REASONS`]).
+    reason: Vec<u8>,
 }
 
 impl<'a> Front<'a> {
@@ -185,13 +209,32 @@ impl<'a> Front<'a> {
             .all(|&w| t.contains(&w) || !strictly_inside(pr.at(self.p[w as usize]), a, b, c))
     }
 
-    /// G3: tries to link free point `qi` to the visible boundary; true when it joined.
+    /// G3: tries to link free point `qi` to the visible boundary; true when it joined
+    /// (else the rule that stopped it is kept in `reason`).
     fn insert(&mut self, qi: u32, ear_filling: bool) -> bool {
+        // The deviation (link_edge > Omega) is a fallback: links within Omega first, so
+        // a long link never takes the place of short ones.
+        let mut res = self.link(qi, ear_filling, self.omega);
+        if res.is_err() && self.link_edge > self.omega {
+            res = self.link(qi, ear_filling, self.link_edge);
+        }
+        match res {
+            Ok(()) => true,
+            Err(r) => {
+                self.reason[qi as usize] = r;
+                false
+            }
+        }
+    }
+
+    /// [`Self::insert`] with facet edges up to `om`; `Err` names the rule that stopped
+    /// the point.
+    fn link(&mut self, qi: u32, ear_filling: bool, om: f64) -> Result<(), u8> {
         let q = self.p[qi as usize];
-        let om = self.omega;
         // Boundary edges with an endpoint within 2 Omega can cross a new facet.
         self.gather(q, 2.0 * om);
-        // ASSUMPTION E13: candidate edges have both endpoints within Omega of q.
+        // ASSUMPTION E13: candidate edges have both endpoints within Omega of q (within
+        // link_edge with the deviation).
         // ASSUMPTION E14: ranked by the point-to-segment distance.
         self.cand.clear();
         for &u in &self.near {
@@ -199,14 +242,18 @@ impl<'a> Front<'a> {
             let (pu, pv) = (self.p[u as usize], self.p[v as usize]);
             // Rule 3: q on (or at) a boundary edge would make a T-junction.
             if segment_distance(q, pu, pv) < self.tj {
-                return false;
+                return Err(R_ON_EDGE);
             }
             if (q - pu).length() <= om && (q - pv).length() <= om {
                 self.cand.push((segment_distance(q, pu, pv), u));
             }
         }
         if self.cand.is_empty() {
-            return false;
+            let near = self
+                .near
+                .iter()
+                .any(|&u| (self.p[u as usize] - q).length() <= om);
+            return Err(if near { R_NO_EDGE } else { R_FAR });
         }
         self.cand
             .sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -218,7 +265,7 @@ impl<'a> Front<'a> {
             .map(|&(_, u)| self.normals[self.bface[u as usize] as usize])
             .sum();
         let Some(n) = n.try_normalize() else {
-            return false;
+            return Err(R_NO_PLANE);
         };
         let pr = Proj::new(q, n);
         let o = pr.at(q);
@@ -252,7 +299,7 @@ impl<'a> Front<'a> {
             }
         }
         if self.visible.is_empty() {
-            return false;
+            return Err(R_HIDDEN);
         }
         // ASSUMPTION E17: the maximal run of consecutive visible edges containing the
         // closest visible one; at most loop_len - 1 edges so that the loop survives.
@@ -291,19 +338,43 @@ impl<'a> Front<'a> {
             let good = seg[i]
                 && seg[i + 1]
                 && min_angle(pa, q, pb) > self.min_angle
+                && self.within_bound_disc([a, qi, b])
                 && nf.dot(self.normals[self.bface[a as usize] as usize]) > 0.0
-                && self.empty_triangle(&pr, [a, qi, b]);
+                && self.empty_triangle(&pr, [a, qi, b])
+                && !self.long_over_free(&pr, [a, qi, b]);
             self.ok.push(good);
         }
         self.seg = seg;
         if !self.ok[ci] {
-            return false;
+            let (a, b) = (self.chain[ci], self.chain[ci + 1]);
+            let (pa, pb) = (self.p[a as usize], self.p[b as usize]);
+            return Err(if !(self.seg[ci] && self.seg[ci + 1]) {
+                R_CROSSING
+            } else if min_angle(pa, q, pb) <= self.min_angle {
+                R_ANGLE
+            } else if !self.within_bound_disc([a, qi, b]) || self.long_over_free(&pr, [a, qi, b]) {
+                R_NO_EDGE
+            } else if face_cross(pa, q, pb).dot(self.normals[self.bface[a as usize] as usize])
+                <= 0.0
+            {
+                R_FOLD
+            } else {
+                R_COVERED
+            });
         }
+        // Two facets of the fan on a shared edge q-v_i must not fold over each other.
+        let fan_n = |i: usize| {
+            face_cross(
+                self.p[self.chain[i] as usize],
+                q,
+                self.p[self.chain[i + 1] as usize],
+            )
+        };
         let (mut lo, mut hi) = (ci, ci);
-        while lo > 0 && self.ok[lo - 1] {
+        while lo > 0 && self.ok[lo - 1] && fan_n(lo - 1).dot(fan_n(lo)) > 0.0 {
             lo -= 1;
         }
-        while hi + 1 < k && self.ok[hi + 1] {
+        while hi + 1 < k && self.ok[hi + 1] && fan_n(hi).dot(fan_n(hi + 1)) > 0.0 {
             hi += 1;
         }
         // G3f: add the fan, splice v_lo -> q -> v_hi+1.
@@ -342,7 +413,7 @@ impl<'a> Front<'a> {
                 }
             }
         }
-        true
+        Ok(())
     }
 
     /// Ear filling over the whole boundary loop until no ear
@@ -519,6 +590,15 @@ impl<'a> Front<'a> {
             *x = true;
         }
         true
+    }
+
+    /// Whether the facet `t` has an edge longer than Omega (a long link, deviation
+    /// `link_edge`) and covers a point not yet meshed (projection `pr`): such a link
+    /// would skip the point.
+    fn long_over_free(&self, pr: &Proj, t: [u32; 3]) -> bool {
+        let l = |x: u32, y: u32| (self.p[x as usize] - self.p[y as usize]).length();
+        let longest = l(t[0], t[1]).max(l(t[1], t[2])).max(l(t[2], t[0]));
+        longest > self.omega && self.covers_free_point(pr, t)
     }
 
     /// Whether the facet `f` fits in a disc of radius Omega / sqrt 2 (a crack-closing
@@ -886,6 +966,7 @@ pub fn grow(
     let mut fr = Front {
         p,
         omega: opts.omega,
+        link_edge: opts.link_edge,
         min_angle: opts.min_angle,
         tj: TJ_REL * opts.omega,
         grid: Grid::new(p, &ids, opts.omega)?,
@@ -912,6 +993,7 @@ pub fn grow(
         crack_face: Vec::new(),
         edge_log: Vec::new(),
         logging: false,
+        reason: vec![R_FAR; n],
     };
     let f0 = fr.add_face(t0);
     for k in 0..3 {
@@ -959,10 +1041,10 @@ pub fn grow(
                         woken.clear();
                         let px = p[x as usize];
                         let (st, wt) = (&fr.state, &waiting);
-                        fr.grid.for_each_near(px, opts.omega, |j| {
+                        fr.grid.for_each_near(px, opts.link_edge, |j| {
                             if wt[j as usize]
                                 && st[j as usize] == FREE
-                                && (p[j as usize] - px).length() <= opts.omega
+                                && (p[j as usize] - px).length() <= opts.link_edge
                             {
                                 woken.push(j);
                             }
@@ -1013,7 +1095,14 @@ pub fn grow(
         fr.crack_count += fr.faces.len() - before;
     }
     let crack_facets = fr.crack_count;
+    let mut unmeshed_by_reason = [0usize; 9];
+    for (st, &r) in fr.state.iter().zip(&fr.reason) {
+        if *st == FREE {
+            unmeshed_by_reason[r as usize] += 1;
+        }
+    }
     Ok(Grown {
+        unmeshed_by_reason,
         crack_facets,
         crack_face: fr.crack_face,
         meshed: fr.state.iter().map(|&x| x != FREE).collect(),

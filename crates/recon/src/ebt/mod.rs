@@ -328,6 +328,7 @@ impl Reconstructor for Ebt {
                 wake_deferred: p.wake_deferred,
                 seed,
                 crack_edge: (p.crack_closing > 0.0).then_some(p.crack_closing * t.omega),
+                link_edge: p.link_edge * t.omega,
             };
             let grown = {
                 let _g = ctx.phase_guard("mesh");
@@ -341,7 +342,11 @@ impl Reconstructor for Ebt {
                 d.insert(k.to_string(), Diagnostic::Number(v));
             };
             // With crack closing, R1 is checked against the closing edge.
-            let closure = opts.crack_edge;
+            // With longer growth links, against the longest link edge.
+            let closure = match opts.crack_edge {
+                Some(e) => Some(e.max(opts.link_edge)),
+                None => (p.link_edge > 1.0).then_some(opts.link_edge),
+            };
             let before = validate::bad_facets_with_closure(&q, &faces, t.omega, theta, closure)?;
             if p.feature_align || p.equilateral {
                 let _g = ctx.phase_guard("enhance");
@@ -383,6 +388,9 @@ impl Reconstructor for Ebt {
             num(&mut d, "passes", grown.passes as f64);
             num(&mut d, "ears", grown.ears as f64);
             num(&mut d, "crack_facets", grown.crack_facets as f64);
+            for (name, k) in grow::REASONS.iter().zip(grown.unmeshed_by_reason) {
+                num(&mut d, &format!("unmeshed_{name}"), k as f64);
+            }
             let long = faces
                 .iter()
                 .filter(|f| {

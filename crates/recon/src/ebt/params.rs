@@ -256,6 +256,10 @@ pub struct EbtParams {
     /// Crack closing after the growth (a named deviation, docs/methods/ebt.md): the
     /// longest closing edge as a multiple of Omega; 0 = the literal growth.
     pub crack_closing: f64,
+    /// Longest edge of a growth facet as a multiple of Omega (a named deviation,
+    /// docs/methods/ebt.md): above 1, a facet with a longer edge must fit in a disc of
+    /// radius Omega / sqrt 2; 1 = Rule 1 and ASSUMPTION E13 literally.
+    pub link_edge: f64,
     /// Measure the distance of every input point to the mesh (diagnostics `dev_*`).
     pub deviation: bool,
 }
@@ -284,6 +288,7 @@ impl Default for EbtParams {
             feature_angle_deg: 30.0,
             equilateral: false,
             crack_closing: std::f64::consts::SQRT_2,
+            link_edge: std::f64::consts::SQRT_2,
             deviation: true,
         }
     }
@@ -348,6 +353,11 @@ pub const EBT_DOCS: &[ParamDoc] = &[
         "close cracks by ears up to this x Omega after the growth (deviation; sqrt 2 = 1.414); 0 = literal",
     ),
     ParamDoc::new(
+        "link_edge",
+        Unit::None,
+        "longest growth edge x Omega if the facet fits in a disc of radius Omega/sqrt 2 (deviation; 1.414); 1 = literal",
+    ),
+    ParamDoc::new(
         "deviation",
         Unit::Flag,
         "measure every input point's distance to the mesh (dev_* diagnostics)",
@@ -402,6 +412,15 @@ impl EbtParams {
                 format!(
                     "must be 0 (off) or in [1, 2] (a multiple of Omega), got {}",
                     self.crack_closing
+                ),
+            ));
+        }
+        if !(1.0..=std::f64::consts::SQRT_2).contains(&self.link_edge) {
+            return Err(bad(
+                "link_edge",
+                format!(
+                    "must be in [1, sqrt 2 = 1.4142135623730951] (a multiple of Omega), got {}",
+                    self.link_edge
                 ),
             ));
         }
