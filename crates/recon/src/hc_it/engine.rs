@@ -71,6 +71,8 @@ pub struct Stats {
     pub zip_unfolded: usize,
     /// Triangles the closure pass added to fill small loops.
     pub zip_filled: usize,
+    /// Triangles the closure pass split to close slits.
+    pub zip_slits: usize,
     /// Faces reversed by the orientation by k (H14).
     pub oriented_flips: usize,
 }
@@ -97,6 +99,7 @@ impl Stats {
         self.zip_attached += o.zip_attached;
         self.zip_unfolded += o.zip_unfolded;
         self.zip_filled += o.zip_filled;
+        self.zip_slits += o.zip_slits;
         self.oriented_flips += o.oriented_flips;
     }
 }
