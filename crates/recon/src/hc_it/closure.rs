@@ -17,8 +17,11 @@
 //! * its new edges cross no edge of the triangles at its vertices (in its own plane).
 //!
 //! New boundary edges are queued; rounds repeat over every remaining boundary edge until
-//! one adds nothing (at most [`MAX_ROUNDS`]). The order is that of the triangles, so the
-//! result is deterministic and independent of the thread count.
+//! one adds nothing (at most [`MAX_ROUNDS`]). Between rounds, slits are split shut
+//! ([`split_slits`]), the fans of a vertex with several are joined ([`join_fans`]) and
+//! small loops are filled; at the end a vertex that still has several fans keeps only its
+//! largest ([`cut_fans`]), so the output has no non-manifold vertex. The order is that of
+//! the triangles, so the result is deterministic and independent of the thread count.
 
 use std::collections::VecDeque;
 
@@ -135,6 +138,10 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     (out, cut)
 }
 
+/// Longest new edge (in rho) of a triangle joining two fans: the two fans' edges at the
+/// vertex are each shorter than rho, so the gap's third side may be longer.
+const JOIN_MAX_EDGE: f64 = 1.5;
+
 /// Joins the fans of every vertex v that has more than one (a non-manifold vertex, left
 /// by the bridging rounds): for each boundary edge a -> v, the triangle (v, a, b) with
 /// the outgoing boundary edge v -> b that turns least from a around v (the gap between
@@ -207,7 +214,7 @@ fn join_at<'b>(
         else {
             continue;
         };
-        if p[a as usize].distance(p[b as usize]) < o.rho
+        if p[a as usize].distance(p[b as usize]) < JOIN_MAX_EDGE * o.rho
             && try_triangle(mesh, p, nbrs, &loose, [v, a, b], n)
         {
             added += 1;
