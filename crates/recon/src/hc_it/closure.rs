@@ -548,6 +548,11 @@ pub fn zip<'b>(
         }
         stats.slits += split_slits(&mut mesh, p, o.theta);
         stats.filled += fill_small_loops(&mut mesh, p, o.max_radius, o.theta);
+        // Those steps may pinch a vertex again (a filled loop through it): cut once more,
+        // with nothing after it.
+        let (m, again) = cut_fans(mesh, p.len());
+        mesh = m;
+        stats.cut += again;
     }
     stats.attached = mesh
         .vt
