@@ -18,9 +18,9 @@
 //!
 //! New boundary edges are queued; rounds repeat over every remaining boundary edge until
 //! one adds nothing (at most [`MAX_ROUNDS`]). Between rounds, slits are split shut
-//! ([`split_slits`]), the fans of a vertex with several are joined ([`join_fans`]) and
+//! (`split_slits`), the fans of a vertex with several are joined (`join_fans`) and
 //! small loops are filled; at the end a vertex that still has several fans keeps only its
-//! largest ([`cut_fans`]), so the output has no non-manifold vertex. The order is that of
+//! largest (`cut_fans`), so the output has no non-manifold vertex. The order is that of
 //! the triangles, so the result is deterministic and independent of the thread count.
 
 use std::collections::VecDeque;
@@ -64,11 +64,11 @@ pub struct ZipStats {
     pub unfolded: usize,
     /// Triangles filling small boundary loops.
     pub filled: usize,
-    /// Boundary triangles split at a slit's vertex ([`split_slits`]).
+    /// Boundary triangles split at a slit's vertex (`split_slits`).
     pub slits: usize,
-    /// Triangles joining two fans at a vertex ([`join_fans`]).
+    /// Triangles joining two fans at a vertex (`join_fans`).
     pub joined: usize,
-    /// Triangles removed to cut a second fan loose from a vertex ([`cut_fans`]).
+    /// Triangles removed to cut a second fan loose from a vertex (`cut_fans`).
     pub cut: usize,
 }
 
