@@ -17,14 +17,22 @@
 //! * its new edges cross no edge of the triangles at its vertices (in its own plane).
 //!
 //! New boundary edges are queued; rounds repeat over every remaining boundary edge until
-//! one adds nothing (at most [`MAX_ROUNDS`]). The order is that of the triangles, so the
-//! result is deterministic and independent of the thread count.
+//! one adds nothing (at most [`MAX_ROUNDS`]). Between rounds, slits are split shut
+//! (`split_slits`), the fans of a vertex with several are joined (`join_fans`) and
+//! small loops are filled; at the end a vertex that still has several fans keeps only its
+//! largest (`cut_fans`), so the output has no non-manifold vertex. The order is that of
+//! the triangles, so the result is deterministic and independent of the thread count.
 
 use std::collections::VecDeque;
 
 use glam::DVec3;
 
-use super::mesh::{Mesh, NONE, angle, circumradius, cross, crosses, min_angle};
+use super::mesh::{Mesh, NONE, angle, circumradius, cross, crosses, min_angle, rotate_to};
+
+/// Sweep triangles with an edge longer than this many rho are left out: they are the
+/// bridges of the winner fallback (the nearest boundary edge of the whole NC when none
+/// is at P's neighbours), which span holes and cracks; the pass re-meshes around them.
+const BRIDGE: f64 = 1.5;
 
 /// Passes of the fold vote at most.
 const UNFOLD_PASSES: usize = 4;
@@ -56,6 +64,276 @@ pub struct ZipStats {
     pub unfolded: usize,
     /// Triangles filling small boundary loops.
     pub filled: usize,
+    /// Boundary triangles split at a slit's vertex (`split_slits`).
+    pub slits: usize,
+    /// Triangles joining two fans at a vertex (`join_fans`).
+    pub joined: usize,
+    /// Triangles removed to cut a second fan loose from a vertex (`cut_fans`).
+    pub cut: usize,
+}
+
+/// Makes every vertex manifold: at a vertex with several fans (triangle groups around
+/// it connected through its edges), every fan but the largest loses its triangles at
+/// that vertex. Returns the rebuilt mesh and the triangles removed.
+fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
+    let mut drop = vec![false; mesh.tris.len()];
+    let mut fan: Vec<(u32, u32)> = Vec::new();
+    for v in 0..n as u32 {
+        let ts = &mesh.vt[v as usize];
+        if ts.len() < 2 {
+            continue;
+        }
+        // Fans: flood over the triangles at v through the edges (v, w).
+        fan.clear();
+        fan.extend(ts.iter().map(|&t| (t, u32::MAX)));
+        let mut label = 0u32;
+        for s in 0..fan.len() {
+            if fan[s].1 != u32::MAX {
+                continue;
+            }
+            fan[s].1 = label;
+            let mut stack = vec![fan[s].0];
+            while let Some(t) = stack.pop() {
+                let tri = mesh.tris[t as usize];
+                for &w in &tri {
+                    if w == v {
+                        continue;
+                    }
+                    for o in mesh.edge_tris(v, w) {
+                        if o == NONE {
+                            continue;
+                        }
+                        if let Some(e) = fan.iter_mut().find(|e| e.0 == o && e.1 == u32::MAX) {
+                            e.1 = label;
+                            stack.push(o);
+                        }
+                    }
+                }
+            }
+            label += 1;
+        }
+        if label < 2 {
+            continue;
+        }
+        let size = |l: u32| fan.iter().filter(|e| e.1 == l).count();
+        let keep = (0..label)
+            .max_by(|&a, &b| size(a).cmp(&size(b)).then(b.cmp(&a)))
+            .unwrap_or(0);
+        for &(t, l) in &fan {
+            if l != keep {
+                drop[t as usize] = true;
+            }
+        }
+    }
+    let cut = drop.iter().filter(|&&d| d).count();
+    if cut == 0 {
+        return (mesh, 0);
+    }
+    let mut out = Mesh::new(n);
+    for (t, d) in mesh.tris.iter().zip(&drop) {
+        if !d {
+            out.add(*t);
+        }
+    }
+    (out, cut)
+}
+
+/// Longest new edge (in rho) of a triangle joining two fans: the two fans' edges at the
+/// vertex are each shorter than rho, so the gap's third side may be longer.
+const JOIN_MAX_EDGE: f64 = 1.5;
+
+/// Joins the fans of every vertex v that has more than one (a non-manifold vertex, left
+/// by the bridging rounds): for each boundary edge a -> v, the triangle (v, a, b) with
+/// the outgoing boundary edge v -> b that turns least from a around v (the gap between
+/// the two fans), under the checks of [`try_triangle`] except the circumradius (the gap
+/// is a wedge, not a hole). Returns the triangles added.
+fn join_fans<'b>(
+    mesh: &mut Mesh,
+    p: &[DVec3],
+    nbrs: &impl Fn(u32) -> &'b [u32],
+    o: &ZipOpts,
+) -> usize {
+    let mut buf = Vec::new();
+    (0..p.len() as u32)
+        .map(|v| join_at(mesh, p, nbrs, o, v, &mut buf))
+        .sum()
+}
+
+/// Outgoing boundary edges at `v`: more than one means several fans (a non-manifold
+/// vertex).
+fn gaps_at(mesh: &Mesh, v: u32, buf: &mut Vec<(u32, u32, u32)>) -> usize {
+    buf.clear();
+    mesh.boundary_at(v, buf);
+    buf.iter().filter(|e| e.0 == v).count()
+}
+
+/// [`join_fans`] at one vertex; returns the triangles added.
+fn join_at<'b>(
+    mesh: &mut Mesh,
+    p: &[DVec3],
+    nbrs: &impl Fn(u32) -> &'b [u32],
+    o: &ZipOpts,
+    v: u32,
+    buf: &mut Vec<(u32, u32, u32)>,
+) -> usize {
+    if gaps_at(mesh, v, buf) <= 1 {
+        return 0;
+    }
+    let loose = ZipOpts {
+        max_radius: f64::INFINITY,
+        ..o.clone()
+    };
+    let ins: Vec<(u32, u32)> = buf
+        .iter()
+        .filter(|&&(_, b, _)| b == v)
+        .map(|&(a, _, t)| (a, t))
+        .collect();
+    let mut added = 0;
+    for (a, t) in ins {
+        if !mesh.is_boundary(a, v) {
+            continue;
+        }
+        let n = cross(p, mesh.tris[t as usize]);
+        let back = p[a as usize] - p[v as usize];
+        buf.clear();
+        mesh.boundary_at(v, buf);
+        let ccw = |w: u32| {
+            let d = p[w as usize] - p[v as usize];
+            let x = back.cross(d).dot(n).atan2(back.dot(d));
+            if x <= 0.0 {
+                x + std::f64::consts::TAU
+            } else {
+                x
+            }
+        };
+        let Some(b) = buf
+            .iter()
+            .filter(|&&(x, w, _)| x == v && w != a)
+            .map(|&(_, w, _)| w)
+            .min_by(|&x, &y| ccw(x).total_cmp(&ccw(y)).then(x.cmp(&y)))
+        else {
+            continue;
+        };
+        if p[a as usize].distance(p[b as usize]) < JOIN_MAX_EDGE * o.rho
+            && try_triangle(mesh, p, nbrs, &loose, [v, a, b], n)
+        {
+            added += 1;
+        }
+    }
+    added
+}
+
+/// Largest angle (rad) at which a slit's sides meet: a boundary vertex y after (or
+/// before) boundary edge u -> v is zipped into that edge only when the gap between them,
+/// seen from v (or u), is narrower than this. A round hole's rim turns by far more.
+const SLIT_ANGLE: f64 = 0.5;
+
+/// Closes slits: gaps between a boundary edge u -> v of triangle T = (u, v, d) and the
+/// boundary vertex y next to it along the boundary (edge v -> y, or y -> u) where y lies
+/// in the gap close to segment u-v (angle u-v-y, or v-u-y, under [`SLIT_ANGLE`], y's
+/// projection inside the segment). Such a gap is a sliver no non-degenerate triangle
+/// (u, v, y) closes, as on exact grids where y is collinear with u and v; instead T is
+/// split at y into (u, y, d) and (y, v, d), which closes the gap's side next to y and
+/// leaves the rest of the slit to the same step. The split keeps the mesh edge-manifold
+/// and consistently oriented, and both halves within `theta` of T's normal. Returns the
+/// triangles split.
+fn split_slits(mesh: &mut Mesh, p: &[DVec3], theta: f64) -> usize {
+    let mut queue: VecDeque<(u32, u32)> = boundary_edges(mesh).collect();
+    let mut buf = Vec::new();
+    let mut split = 0;
+    while let Some((u, v)) = queue.pop_front() {
+        if !mesh.is_boundary(u, v) {
+            continue;
+        }
+        // Boundary neighbours: y after v (v -> y) and x before u (x -> u).
+        buf.clear();
+        mesh.boundary_at(v, &mut buf);
+        let after: Vec<u32> = buf
+            .iter()
+            .filter(|&&(a, _, _)| a == v)
+            .map(|&(_, b, _)| b)
+            .collect();
+        buf.clear();
+        mesh.boundary_at(u, &mut buf);
+        let before: Vec<u32> = buf
+            .iter()
+            .filter(|&&(_, b, _)| b == u)
+            .map(|&(a, _, _)| a)
+            .collect();
+        let cands = after
+            .into_iter()
+            .map(|y| (y, v))
+            .chain(before.into_iter().map(|x| (x, u)));
+        for (y, at) in cands {
+            if let Some((e1, e2)) = try_split(mesh, p, theta, u, v, y, at) {
+                split += 1;
+                queue.push_back(e1);
+                queue.push_back(e2);
+                break;
+            }
+        }
+    }
+    split
+}
+
+/// Splits the triangle of boundary edge u -> v at y when y closes a slit at `at` (u or
+/// v); returns the new boundary edges to revisit.
+fn try_split(
+    mesh: &mut Mesh,
+    p: &[DVec3],
+    theta: f64,
+    u: u32,
+    v: u32,
+    y: u32,
+    at: u32,
+) -> Option<((u32, u32), (u32, u32))> {
+    if y == u || y == v {
+        return None;
+    }
+    let id = mesh.edge_tris(u, v)[0];
+    let t = rotate_to(mesh.tris[id as usize], u);
+    let d = t[2];
+    if y == d {
+        return None;
+    }
+    let (pu, pv, py) = (p[u as usize], p[v as usize], p[y as usize]);
+    let other = if at == v { pu } else { pv };
+    let pa = p[at as usize];
+    let (e, f) = (other - pa, py - pa);
+    if angle(e, f) >= SLIT_ANGLE || f.length_squared() >= e.length_squared() {
+        return None;
+    }
+    // y on the gap's side of u-v, or on the line up to a twentieth of |u-v| (curved
+    // surfaces): not inside T.
+    let n_t = cross(p, t);
+    let uv = pv - pu;
+    if (uv.cross(py - pu).dot(n_t.normalize_or_zero()) / uv.length()) > 0.05 * uv.length() {
+        return None;
+    }
+    let (t1, t2) = ([u, y, d], [y, v, d]);
+    if mesh.has_edge(y, d) {
+        return None;
+    }
+    // The new boundary-side edges u -> y and y -> v: free, or closing a boundary edge.
+    for (a, b) in [(u, y), (y, v)] {
+        if mesh.has_edge(a, b) && !mesh.is_boundary(b, a) {
+            return None;
+        }
+    }
+    let (n1, n2) = (cross(p, t1), cross(p, t2));
+    if n1.length_squared() == 0.0
+        || n2.length_squared() == 0.0
+        || angle(n1, n_t) >= theta
+        || angle(n2, n_t) >= theta
+    {
+        return None;
+    }
+    mesh.replace(id, t1);
+    if mesh.add(t2).is_none() {
+        mesh.replace(id, t);
+        return None;
+    }
+    Some(((u, y), (y, v)))
 }
 
 /// Loops of at most this many edges may be filled.
@@ -218,7 +496,7 @@ pub fn zip<'b>(
         m
     };
     let mut stats = ZipStats::default();
-    let (mut mesh, folded) = unfold(p, tris, &nbrs, o.theta);
+    let (mut mesh, folded) = unfold(p, tris, &nbrs, o.theta, o.rho);
     stats.unfolded = folded;
     let mut ctx = Rounds {
         buf: Vec::new(),
@@ -241,11 +519,40 @@ pub fn zip<'b>(
                 }
             }
         }
+        let s = split_slits(&mut mesh, p, o.theta);
+        stats.slits += s;
+        let j = join_fans(&mut mesh, p, &nbrs, o);
+        stats.joined += j;
         let f = fill_small_loops(&mut mesh, p, o.max_radius, o.theta);
         stats.filled += f;
-        if added + f == 0 {
+        if added + s + j + f == 0 {
             break;
         }
+    }
+    // The last bridging round may leave a vertex with two fans: join them, else cut the
+    // smaller fan loose from it, and close the slits that leaves.
+    stats.joined += join_fans(&mut mesh, p, &nbrs, o);
+    let (m, cut) = cut_fans(mesh, p.len());
+    mesh = m;
+    stats.cut = cut;
+    if cut > 0 {
+        for bowtie in [false, true] {
+            for _ in 0..MAX_ROUNDS {
+                stats.rounds += 1;
+                let a = ctx.round(&mut mesh, p, &nbrs, o, bowtie, checkpoint)?;
+                stats.triangles += a;
+                if a == 0 {
+                    break;
+                }
+            }
+        }
+        stats.slits += split_slits(&mut mesh, p, o.theta);
+        stats.filled += fill_small_loops(&mut mesh, p, o.max_radius, o.theta);
+        // Those steps may pinch a vertex again (a filled loop through it): cut once more,
+        // with nothing after it.
+        let (m, again) = cut_fans(mesh, p.len());
+        mesh = m;
+        stats.cut += again;
     }
     stats.attached = mesh
         .vt
@@ -301,7 +608,24 @@ impl Rounds {
             ) else {
                 continue;
             };
-            added += 1;
+            let mut n_new = 1;
+            if bowtie && gaps_at(mesh, c, &mut self.buf) > 1 {
+                // A bridge to another fan of c is kept only if the gap it leaves between
+                // the fans closes at once, so no vertex is left with two fans.
+                n_new += join_at(mesh, p, nbrs, o, c, &mut self.buf);
+                if gaps_at(mesh, c, &mut self.buf) > 1 {
+                    for _ in 0..n_new {
+                        mesh.pop();
+                    }
+                    continue;
+                }
+            }
+            added += n_new;
+            self.buf.clear();
+            mesh.boundary_at(c, &mut self.buf);
+            for &(u, v, _) in &self.buf {
+                queue.push_back((u, v));
+            }
             for (u, v) in [(a, c), (c, b)] {
                 if mesh.is_boundary(u, v) {
                     queue.push_back((u, v));
@@ -324,6 +648,7 @@ fn unfold<'b>(
     tris: Vec<[u32; 3]>,
     nbrs: &impl Fn(u32) -> &'b [u32],
     theta: f64,
+    rho: f64,
 ) -> (Mesh, usize) {
     let mut full = Mesh::new(p.len());
     for &t in &tris {
@@ -363,8 +688,11 @@ fn unfold<'b>(
     }
     let mut mesh = Mesh::new(p.len());
     let mut dropped = 0;
+    let bridge2 = (BRIDGE * rho).powi(2);
     for (t, k) in tris.into_iter().zip(keep) {
-        if k && !overlaps(&mesh, p, t, nbrs(t[0])) && mesh.add(t).is_some() {
+        let long =
+            (0..3).any(|k| p[t[k] as usize].distance_squared(p[t[(k + 1) % 3] as usize]) > bridge2);
+        if k && !long && !overlaps(&mesh, p, t, nbrs(t[0])) && mesh.add(t).is_some() {
             continue;
         }
         dropped += 1;

@@ -71,6 +71,12 @@ pub struct Stats {
     pub zip_unfolded: usize,
     /// Triangles the closure pass added to fill small loops.
     pub zip_filled: usize,
+    /// Triangles the closure pass split to close slits.
+    pub zip_slits: usize,
+    /// Triangles the closure pass added to join two fans at a vertex.
+    pub zip_joined: usize,
+    /// Triangles the closure pass removed to cut a second fan loose from a vertex.
+    pub zip_cut: usize,
     /// Faces reversed by the orientation by k (H14).
     pub oriented_flips: usize,
 }
@@ -97,6 +103,9 @@ impl Stats {
         self.zip_attached += o.zip_attached;
         self.zip_unfolded += o.zip_unfolded;
         self.zip_filled += o.zip_filled;
+        self.zip_slits += o.zip_slits;
+        self.zip_joined += o.zip_joined;
+        self.zip_cut += o.zip_cut;
         self.oriented_flips += o.oriented_flips;
     }
 }

@@ -158,6 +158,14 @@ impl Mesh {
         Some(id)
     }
 
+    /// Removes the triangle added last (undoes [`Self::add`]).
+    pub fn pop(&mut self) {
+        if let Some(last) = self.tris.len().checked_sub(1) {
+            self.unlink(last as u32);
+            self.tris.pop();
+        }
+    }
+
     fn link(&mut self, id: u32, t: [u32; 3]) {
         for k in 0..3 {
             let e = self

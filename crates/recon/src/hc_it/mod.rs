@@ -265,6 +265,9 @@ impl Reconstructor for HcIt {
                         o.stats.zip_attached = z.attached;
                         o.stats.zip_unfolded = z.unfolded;
                         o.stats.zip_filled = z.filled;
+                        o.stats.zip_slits = z.slits;
+                        o.stats.zip_joined = z.joined;
+                        o.stats.zip_cut = z.cut;
                     }
                     out = Some(match out {
                         None => o,
@@ -345,6 +348,9 @@ impl Reconstructor for HcIt {
             num("zip_attached", s.zip_attached as f64);
             num("zip_unfolded", s.zip_unfolded as f64);
             num("zip_filled", s.zip_filled as f64);
+            num("zip_slits", s.zip_slits as f64);
+            num("zip_joined", s.zip_joined as f64);
+            num("zip_cut", s.zip_cut as f64);
             num("oriented_flips", s.oriented_flips as f64);
             num("ignored", slab.iter().filter(|&&k| k < 0).count() as f64);
             let mesh = TriMesh::new(pts.to_vec(), out.tris)?;
