@@ -58,6 +58,53 @@ impl Field<'_> {
     }
 }
 
+impl Field<'_> {
+    /// Where `chi - iso` changes sign on the edge from node `a` along `d`, as a
+    /// fraction of the edge. The indicator is a smoothed step a few cells wide, far
+    /// from linear across an edge, so linear interpolation of the two end values misses
+    /// the crossing by up to a tenth of a cell; the cubic through the four nodes
+    /// `a - d, a, a + d, a + 2d` on the edge's line (Lagrange) follows the step, and its
+    /// root in the bracket is found by bisection. Linear where the line leaves the grid
+    /// or the cubic does not change sign in the bracket.
+    fn crossing(&self, a: [usize; 3], d: [usize; 3]) -> f64 {
+        let at = |m: i64| -> Option<f64> {
+            let c = [0, 1, 2].map(|k| a[k] as i64 + m * d[k] as i64);
+            if c.iter().any(|&v| v < 0 || v >= self.n as i64) {
+                return None;
+            }
+            let c = c.map(|v| v as usize);
+            Some(f64::from(self.x[self.id(c)]) - f64::from(self.iso))
+        };
+        let (Some(p1), Some(p2)) = (at(0), at(1)) else {
+            return 0.5;
+        };
+        let linear = if p1 == p2 { 0.5 } else { p1 / (p1 - p2) };
+        let (Some(p0), Some(p3)) = (at(-1), at(2)) else {
+            return linear;
+        };
+        // Lagrange cubic through t = -1, 0, 1, 2.
+        let cubic = |t: f64| {
+            -p0 * t * (t - 1.0) * (t - 2.0) / 6.0 + p1 * (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0
+                - p2 * (t + 1.0) * t * (t - 2.0) / 2.0
+                + p3 * (t + 1.0) * t * (t - 1.0) / 6.0
+        };
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        let flo = cubic(lo);
+        if flo == 0.0 || (flo > 0.0) == (cubic(hi) > 0.0) {
+            return linear;
+        }
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if (cubic(mid) > 0.0) == (flo > 0.0) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
 /// Crossing edges of the nodes of one plane: sorted keys and vertex positions.
 type PlaneVertices = (Vec<u64>, Vec<DVec3>);
 
@@ -74,18 +121,8 @@ fn plane_vertices(f: &Field, k: usize) -> PlaneVertices {
                 if b.iter().any(|&v| v >= n) || f.inside(b) == ina {
                     continue;
                 }
-                let (va, vb) = (f.x[f.id(a)], f.x[f.id(b)]);
-                let t = if va == vb {
-                    0.5
-                } else {
-                    f64::from((f.iso - va) / (vb - va))
-                };
                 // Kept off the nodes so that no face collapses to a point.
-                let t = if t.is_finite() {
-                    t.clamp(1e-3, 1.0 - 1e-3)
-                } else {
-                    0.5
-                };
+                let t = f.crossing(a, d).clamp(1e-3, 1.0 - 1e-3);
                 let p = DVec3::new(i as f64, j as f64, k as f64)
                     + t * DVec3::new(d[0] as f64, d[1] as f64, d[2] as f64);
                 keys.push(f.key(a, d));

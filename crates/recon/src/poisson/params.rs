@@ -41,7 +41,7 @@ impl Default for PoissonParams {
             scale: 1.1,
             max_cycles: 40,
             tolerance: 1e-5,
-            sweeps: 3,
+            sweeps: 2,
             trim_quantile: 0.0,
             trim_radius_cells: 2.0,
             max_flipped_share: 0.2,

@@ -68,6 +68,13 @@ pub(crate) struct Level {
     pub beta: f32,
     /// The samples at this level's resolution.
     pub samples: Samples,
+    /// The cells holding samples, sorted (`beta * B^T B` restricted to each is an 8x8
+    /// block over its corners; applying the blocks costs one pass over the occupied
+    /// cells instead of one over the samples).
+    pub cells: Vec<[u32; 3]>,
+    /// `beta * sum_p phi_a(p) phi_b(p)` for the corners `a, b` (offsets `a & 1`,
+    /// `(a >> 1) & 1`, `a >> 2`) of each cell in `cells`.
+    pub blocks: Vec<[f32; 64]>,
     /// Diagonal of `beta * B^T B`.
     pub sdiag: Vec<f32>,
     /// Unknowns.
@@ -85,6 +92,39 @@ pub(crate) struct Level {
 fn corner_weight(f: [f32; 3], o: [usize; 3]) -> f32 {
     let w = |a: usize| if o[a] == 1 { f[a] } else { 1.0 - f[a] };
     w(0) * w(1) * w(2)
+}
+
+/// Node index of corner `a` (offsets `a & 1`, `(a >> 1) & 1`, `a >> 2`) of cell `c`.
+#[inline]
+fn corner_id(n: usize, c: [u32; 3], a: usize) -> usize {
+    ((c[2] as usize + (a >> 2)) * n + c[1] as usize + ((a >> 1) & 1)) * n + c[0] as usize + (a & 1)
+}
+
+/// The occupied cells (sorted by `(k, j, i)`) and their 8x8 screening blocks
+/// `beta * sum_p phi_a(p) phi_b(p)`, summed in sample order within a cell.
+fn screening_blocks(samples: &Samples, beta: f32) -> (Vec<[u32; 3]>, Vec<[f32; 64]>) {
+    let key = |c: [u32; 3]| (c[2], c[1], c[0]);
+    let mut order: Vec<u32> = (0..samples.cell.len() as u32).collect();
+    order.par_sort_by_key(|&i| (key(samples.cell[i as usize]), i));
+    let mut cells: Vec<[u32; 3]> = Vec::new();
+    let mut blocks: Vec<[f32; 64]> = Vec::new();
+    for &i in &order {
+        let (c, f) = (samples.cell[i as usize], samples.frac[i as usize]);
+        if cells.last() != Some(&c) {
+            cells.push(c);
+            blocks.push([0.0; 64]);
+        }
+        let phi: [f32; 8] =
+            std::array::from_fn(|a| corner_weight(f, [a & 1, (a >> 1) & 1, a >> 2]));
+        if let Some(m) = blocks.last_mut() {
+            for a in 0..8 {
+                for b in 0..8 {
+                    m[a * 8 + b] += beta * phi[a] * phi[b];
+                }
+            }
+        }
+    }
+    (cells, blocks)
 }
 
 /// Trilinear interpolation of `x` (nodes per side `n`) in cell `c` at `f`.
@@ -108,18 +148,15 @@ impl Level {
     pub fn new(cells: usize, lap: f32, beta: f32, samples: Samples) -> Self {
         let n = cells + 1;
         let len = n * n * n;
+        let (occupied, blocks) = if beta > 0.0 {
+            screening_blocks(&samples, beta)
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let mut sdiag = vec![0f32; len];
-        if beta > 0.0 {
-            for (c, f) in samples.cell.iter().zip(&samples.frac) {
-                let base = (c[2] as usize * n + c[1] as usize) * n + c[0] as usize;
-                for oz in 0..2 {
-                    for oy in 0..2 {
-                        for ox in 0..2 {
-                            let w = corner_weight(*f, [ox, oy, oz]);
-                            sdiag[base + (oz * n + oy) * n + ox] += beta * w * w;
-                        }
-                    }
-                }
+        for (c, m) in occupied.iter().zip(&blocks) {
+            for a in 0..8 {
+                sdiag[corner_id(n, *c, a)] += m[a * 8 + a];
             }
         }
         Self {
@@ -127,6 +164,8 @@ impl Level {
             lap,
             beta,
             samples,
+            cells: occupied,
+            blocks,
             sdiag,
             x: vec![0.0; len],
             b: vec![0.0; len],
@@ -176,18 +215,19 @@ impl Level {
         (s, deg)
     }
 
-    /// Scatters, for colour `col`, each sample's screening coupling to the one corner
-    /// of its cell in that colour: `acc_c += beta phi_c (chi(p) - phi_c chi_c)` (the
-    /// off-diagonal part of row `c` of `beta B^T B`). Serial over the samples in a fixed
-    /// order, so the sums do not depend on threads.
+    /// Adds, for colour `col`, the off-diagonal part of `beta B^T B` times `x` to the
+    /// accumulator at the one corner of each occupied cell in that colour. Serial over
+    /// the cells in a fixed order, so the sums do not depend on threads.
     fn scatter_offdiagonal(&mut self, col: [usize; 3]) {
         let n = self.n;
-        for (c, f) in self.samples.cell.iter().zip(&self.samples.frac) {
+        for (c, m) in self.cells.iter().zip(&self.blocks) {
             let o = [0, 1, 2].map(|a| (col[a] ^ (c[a] as usize & 1)) & 1);
-            let id = ((c[2] as usize + o[2]) * n + c[1] as usize + o[1]) * n + c[0] as usize + o[0];
-            let phi = corner_weight(*f, o);
-            let chi = interp(&self.x, n, *c, *f);
-            self.acc[id] += self.beta * phi * (chi - phi * self.x[id]);
+            let a = o[0] + 2 * o[1] + 4 * o[2];
+            let mut v = 0.0f32;
+            for b in (0..8).filter(|&b| b != a) {
+                v += m[a * 8 + b] * self.x[corner_id(n, *c, b)];
+            }
+            self.acc[corner_id(n, *c, a)] += v;
         }
     }
 
@@ -250,18 +290,11 @@ impl Level {
     pub fn residual(&mut self) -> f64 {
         let n = self.n;
         let plane = n * n;
-        if self.beta > 0.0 {
-            for (c, f) in self.samples.cell.iter().zip(&self.samples.frac) {
-                let base = (c[2] as usize * n + c[1] as usize) * n + c[0] as usize;
-                let chi = interp(&self.x, n, *c, *f);
-                for oz in 0..2 {
-                    for oy in 0..2 {
-                        for ox in 0..2 {
-                            let w = corner_weight(*f, [ox, oy, oz]);
-                            self.acc[base + (oz * n + oy) * n + ox] += self.beta * w * chi;
-                        }
-                    }
-                }
+        for (c, m) in self.cells.iter().zip(&self.blocks) {
+            let xs: [f32; 8] = std::array::from_fn(|b| self.x[corner_id(n, *c, b)]);
+            for a in 0..8 {
+                let v: f32 = (0..8).map(|b| m[a * 8 + b] * xs[b]).sum();
+                self.acc[corner_id(n, *c, a)] += v;
             }
         }
         let mut r = std::mem::take(&mut self.r);
