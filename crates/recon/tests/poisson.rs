@@ -109,7 +109,7 @@ fn sphere_is_within_a_fraction_of_a_cell_and_genus_zero() {
             "{vol}"
         );
         assert_eq!(diag(&r, INTERPOLATING_DIAGNOSTIC), 0.0);
-        assert!(diag(&r, "relative_residual") < 1e-5);
+        assert!(diag(&r, "relative_residual") < 1e-4);
         assert!(r.refused.is_empty());
     }
 }

@@ -9,7 +9,7 @@ use reconbench_geom::method::MethodError;
 use super::screened::Level;
 
 /// Gauss-Seidel sweeps on the coarsest level (5^3 nodes: cheap, and enough to solve it).
-const COARSEST_SWEEPS: usize = 60;
+const COARSEST_SWEEPS: usize = 30;
 
 /// Outcome of [`solve`].
 #[derive(Debug, Clone, Copy)]
@@ -24,7 +24,7 @@ pub(crate) struct SolveStats {
 /// pairs (one for even `f`, two for odd).
 #[inline]
 fn parents(f: usize) -> ([usize; 2], [f32; 2], usize) {
-    if f % 2 == 0 {
+    if f.is_multiple_of(2) {
         ([f / 2, 0], [1.0, 0.0], 1)
     } else {
         ([f / 2, f / 2 + 1], [0.5, 0.5], 2)

@@ -40,7 +40,7 @@ impl Default for PoissonParams {
             screening: 4.0,
             scale: 1.1,
             max_cycles: 40,
-            tolerance: 1e-5,
+            tolerance: 1e-4,
             sweeps: 2,
             trim_quantile: 0.0,
             trim_radius_cells: 2.0,

@@ -20,6 +20,9 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
+/// Levels with fewer nodes per side run their passes on the calling thread.
+const PARALLEL_SIDE: usize = 40;
+
 /// Samples of one level: the cell each lies in and its position inside it.
 #[derive(Debug, Default)]
 pub(crate) struct Samples {
@@ -259,7 +262,7 @@ impl Level {
                 .map(|(_, p)| p)
                 .collect();
             let this = &*self;
-            mine.into_par_iter().zip(accs).for_each(|((k, cur), acc)| {
+            let update = |((k, cur), acc): ((usize, &mut [f32]), &mut [f32])| {
                 let below = if k > 0 { others[k - 1] } else { None };
                 let above = others.get(k + 1).copied().flatten();
                 let g0 = k * plane;
@@ -273,7 +276,13 @@ impl Level {
                             / (this.lap * deg + this.sdiag[g0 + l]);
                     }
                 }
-            });
+            };
+            // Small levels run on this thread: dispatching them costs more than they do.
+            if this.n < PARALLEL_SIDE {
+                mine.into_iter().zip(accs).for_each(update);
+            } else {
+                mine.into_par_iter().zip(accs).for_each(update);
+            }
         }
         self.x = x;
         self.acc = acc;
@@ -300,29 +309,37 @@ impl Level {
         let mut r = std::mem::take(&mut self.r);
         let mut acc = std::mem::take(&mut self.acc);
         let this = &*self;
-        let sums: Vec<f64> = r
-            .par_chunks_mut(plane)
-            .zip(acc.par_chunks_mut(plane))
-            .enumerate()
-            .map(|(k, (rp, ap))| {
-                let g0 = k * plane;
-                let cur = &this.x[g0..g0 + plane];
-                let below = (k > 0).then(|| &this.x[g0 - plane..g0]);
-                let above = (k + 1 < n).then(|| &this.x[g0 + plane..g0 + 2 * plane]);
-                let mut sum = 0.0f64;
-                for j in 0..n {
-                    for i in 0..n {
-                        let l = j * n + i;
-                        let (s, deg) = this.neighbours(cur, below, above, i, j);
-                        let v = this.b[g0 + l] - this.lap * (deg * cur[l] - s) - ap[l];
-                        ap[l] = 0.0;
-                        rp[l] = v;
-                        sum += f64::from(v) * f64::from(v);
-                    }
+        let plane_residual = |(k, (rp, ap)): (usize, (&mut [f32], &mut [f32]))| {
+            let g0 = k * plane;
+            let cur = &this.x[g0..g0 + plane];
+            let below = (k > 0).then(|| &this.x[g0 - plane..g0]);
+            let above = (k + 1 < n).then(|| &this.x[g0 + plane..g0 + 2 * plane]);
+            let mut sum = 0.0f64;
+            for j in 0..n {
+                for i in 0..n {
+                    let l = j * n + i;
+                    let (s, deg) = this.neighbours(cur, below, above, i, j);
+                    let v = this.b[g0 + l] - this.lap * (deg * cur[l] - s) - ap[l];
+                    ap[l] = 0.0;
+                    rp[l] = v;
+                    sum += f64::from(v) * f64::from(v);
                 }
-                sum
-            })
-            .collect();
+            }
+            sum
+        };
+        let sums: Vec<f64> = if n < PARALLEL_SIDE {
+            r.chunks_mut(plane)
+                .zip(acc.chunks_mut(plane))
+                .enumerate()
+                .map(plane_residual)
+                .collect()
+        } else {
+            r.par_chunks_mut(plane)
+                .zip(acc.par_chunks_mut(plane))
+                .enumerate()
+                .map(plane_residual)
+                .collect()
+        };
         self.r = r;
         self.acc = acc;
         sums.iter().sum()
