@@ -5,12 +5,12 @@
 //!
 //! The indicator `chi` minimises `∫ |V - ∇chi|^2 + alpha (Area / sum w) sum_p w_p
 //! chi(p)^2` on a regular grid of `2^depth` cells per side over the padded cubic
-//! bounding box ([`screened`]): `V` is the oriented normals spread with a quadratic
+//! bounding box (`screened.rs`): `V` is the oriented normals spread with a quadratic
 //! B-spline and weighted by the area each sample stands for (from its 8 nearest
 //! neighbours, so the field is density-adaptive), the screening term pins `chi` to 0 at
-//! the samples. Geometric multigrid solves the normal equations ([`multigrid`]), the
+//! the samples. Geometric multigrid solves the normal equations (`multigrid.rs`), the
 //! level set at the mean of `chi` over the samples is extracted by marching tetrahedra
-//! ([`extract`]). Optionally, vertices in thinly sampled regions (the caps Poisson puts
+//! (`extract.rs`). Optionally, vertices in thinly sampled regions (the caps Poisson puts
 //! over holes) are trimmed by a density quantile, as Open3D users do.
 //!
 //! Our own solver is the justified exception to "prefer crates": `poisson_reconstruction`
