@@ -15,8 +15,9 @@
 //!
 //! * [`ball_pivoting`] — `ball-pivoting`, the Ball-Pivoting Algorithm (Bernardini et
 //!   al. 1999), the interpolating baseline of seed 001.
-//! * [`poisson`] — `poisson`, Poisson surface reconstruction (Kazhdan, Bolitho & Hoppe
-//!   2006) through the `threecrate-reconstruction` crate; approximating.
+//! * [`poisson`] — `poisson`, screened Poisson surface reconstruction (Kazhdan & Hoppe
+//!   2013; `screening = 0`: Kazhdan, Bolitho & Hoppe 2006), our own multigrid solver on
+//!   a regular grid; approximating.
 //!
 //! Every method implements [`reconbench_geom::method::Reconstructor`] and has a serde
 //! `Params` struct with documented defaults.

@@ -1,7 +1,7 @@
 //! Tests of `poisson` (issue 21): distance to the true sphere within a bound from the
-//! grid depth, genus on a sphere and a torus, outward orientation, the
-//! non-interpolating marker, trimming of the bulge over a missing half, determinism, and
-//! bad input.
+//! grid depth, screening closer than the unscreened equation, genus on a sphere and a
+//! torus, outward orientation, the non-interpolating marker, trimming of the bulge over
+//! a missing half, determinism for 1 and 2 threads, and bad input.
 
 use glam::DVec3;
 use rand::SeedableRng;
@@ -58,28 +58,46 @@ fn volume(r: &Reconstruction) -> f64 {
         .sum()
 }
 
-/// The distance of every vertex to the unit sphere is below a bound from the depth:
-/// the finest cell is `h = extent / 2^depth` (extent 2 here), and the iso-surface of a
-/// well-sampled sphere stays within a fraction of a cell of it.
+/// Largest and mean distance of the vertices to the unit sphere.
+fn sphere_error(r: &Reconstruction) -> (f64, f64) {
+    let d: Vec<f64> = r
+        .mesh
+        .vertices()
+        .iter()
+        .map(|p| (p.length() - 1.0).abs())
+        .collect();
+    let max = d.iter().cloned().fold(0.0, f64::max);
+    (max, d.iter().sum::<f64>() / d.len() as f64)
+}
+
+/// The distance of every vertex to the unit sphere is below a bound from the depth.
+/// The grid cell is `h = scale * 2 / 2^depth` (the sample's bounding cube has side just
+/// under 2). The grid resolves the surface to its node spacing: a level set through
+/// values sampled at the nodes is placed by linear interpolation along grid edges, so
+/// an error of a fraction of `h` is what the depth buys. Bounds: every vertex within
+/// half a cell, the mean within a tenth (measured: 0.28 h and 0.04 h at depth 5, 0.35 h
+/// and 0.045 h at depth 6).
 #[test]
 fn sphere_is_within_a_fraction_of_a_cell_and_genus_zero() {
-    let c = sphere(4000, 1);
+    let c = sphere(8000, 1);
     for depth in [5, 6] {
         let r = run_with(&c, params(depth)).unwrap();
-        // Grid of 2^depth nodes over 1.2 x the extent (just under 2 for the sample).
         let h = diag(&r, "cell_size");
-        let nominal = 1.2 * 2.0 / f64::from((1u32 << depth) - 1);
+        // Side 1.1 x the bounding cube, or more to keep 2.25 cells of padding.
+        let cells = f64::from(1u32 << depth);
+        let nominal = 1.1f64.max(1.0 / (1.0 - 4.5 / cells)) * 2.0 / cells;
         assert!(h <= nominal && h > 0.99 * nominal, "{h} vs {nominal}");
-        let d: Vec<f64> = r
-            .mesh
-            .vertices()
-            .iter()
-            .map(|p| (p.length() - 1.0).abs())
-            .collect();
-        let max = d.iter().cloned().fold(0.0, f64::max);
-        let mean = d.iter().sum::<f64>() / d.len() as f64;
+        let (max, mean) = sphere_error(&r);
+        eprintln!(
+            "depth {depth}: max {:.4} h, mean {:.4} h, cycles {}, res {:e}, beta {}",
+            max / h,
+            mean / h,
+            diag(&r, "v_cycles"),
+            diag(&r, "relative_residual"),
+            diag(&r, "screening_weight")
+        );
         assert!(max < 0.5 * h, "depth {depth}: max {max} vs h {h}");
-        assert!(mean < 0.2 * h, "depth {depth}: mean {mean} vs h {h}");
+        assert!(mean < 0.1 * h, "depth {depth}: mean {mean} vs h {h}");
         let t = analyze(&r.mesh);
         assert!(t.watertight, "{t:?}");
         assert_eq!((t.components, t.genus), (1, Some(0)), "{t:?}");
@@ -91,8 +109,36 @@ fn sphere_is_within_a_fraction_of_a_cell_and_genus_zero() {
             "{vol}"
         );
         assert_eq!(diag(&r, INTERPOLATING_DIAGNOSTIC), 0.0);
+        assert!(diag(&r, "relative_residual") < 1e-4);
         assert!(r.refused.is_empty());
     }
+}
+
+/// Screening pins the level set to the samples: on the same input, the screened
+/// surface is strictly closer to the true sphere on average (by at least 5 %) than the
+/// unscreened one, and its largest error is no worse (1 % slack: the largest error
+/// sits where the grid, not the equation, limits the fit).
+#[test]
+fn screening_brings_the_surface_closer_than_the_2006_equation() {
+    let c = sphere(8000, 3);
+    let screened = run_with(&c, params(5)).unwrap();
+    let plain = run_with(
+        &c,
+        PoissonParams {
+            screening: 0.0,
+            ..params(5)
+        },
+    )
+    .unwrap();
+    let (smax, smean) = sphere_error(&screened);
+    let (pmax, pmean) = sphere_error(&plain);
+    eprintln!("screened {smax} {smean}, unscreened {pmax} {pmean}");
+    assert!(
+        smean < 0.95 * pmean && smax < 1.01 * pmax,
+        "{smax} {smean} vs {pmax} {pmean}"
+    );
+    assert_eq!(diag(&plain, "screening_weight"), 0.0);
+    assert_eq!(analyze(&plain.mesh).genus, Some(0));
 }
 
 #[test]
@@ -104,8 +150,8 @@ fn torus_has_genus_one() {
     assert!(volume(&r) > 0.0);
 }
 
-/// A hemisphere: Poisson closes the open rim with a cap far from every sample;
-/// trimming by density removes it and leaves an open surface.
+/// A hemisphere: Poisson closes the open rim with a cap far from every sample (about
+/// half the vertices); trimming by density removes it and leaves an open surface.
 #[test]
 fn trimming_removes_the_bulge_over_a_missing_half() {
     let full = sphere(6000, 4);
@@ -129,7 +175,7 @@ fn trimming_removes_the_bulge_over_a_missing_half() {
     let trimmed = run_with(
         &c,
         PoissonParams {
-            trim_quantile: 0.4,
+            trim_quantile: 0.6,
             ..params(5)
         },
     )
@@ -143,13 +189,16 @@ fn trimming_removes_the_bulge_over_a_missing_half() {
 #[test]
 fn runs_are_deterministic_whatever_the_thread_count() {
     let c = sphere(2000, 5);
-    let a = run_with(&c, params(5)).unwrap();
-    let b = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| run_with(&c, params(5)).unwrap());
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| run_with(&c, params(5)).unwrap())
+    };
+    let (a, b) = (on(1), on(2));
     assert_eq!(a.mesh, b.mesh);
+    assert_eq!(diag(&a, "v_cycles"), diag(&b, "v_cycles"));
 }
 
 fn err_text(r: Result<Reconstruction, MethodError>) -> String {
@@ -175,6 +224,34 @@ fn bad_input_gives_named_errors() {
             .with_normals(vec![DVec3::Z; n])
             .unwrap();
         assert!(err_text(run_with(&c, p())).contains("at least 3"), "{n}");
+    }
+    // Three points of a triangle and a fourth with a zero normal: fewer than 4 used.
+    let c = PointCloud::new(vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z])
+        .unwrap()
+        .with_normals(vec![DVec3::Z, DVec3::Z, DVec3::Z, DVec3::ZERO])
+        .unwrap();
+    assert!(err_text(run_with(&c, p())).contains("at least 4"));
+    // A planar patch (a degenerate box): no solid to bound.
+    let plane: Vec<DVec3> = (0..100)
+        .map(|i| DVec3::new((i % 10) as f64, (i / 10) as f64 * 0.7, 0.0))
+        .collect();
+    let c = PointCloud::new(plane)
+        .unwrap()
+        .with_normals(vec![DVec3::Z; 100])
+        .unwrap();
+    assert!(err_text(run_with(&c, p())).contains("one plane"));
+    // NaN in a position or a normal is refused when the cloud is built or run.
+    let mut pts = sphere(100, 1).positions().to_vec();
+    pts[7].x = f64::NAN;
+    assert!(PointCloud::new(pts).is_err());
+    let mut nrm = sphere(100, 1).normals().unwrap().to_vec();
+    nrm[3].y = f64::NAN;
+    match sphere(100, 1).with_normals(nrm) {
+        Err(_) => {}
+        Ok(c) => {
+            let e = err_text(run_with(&c, p()));
+            assert!(e.contains("poisson"), "{e}");
+        }
     }
     let c = PointCloud::new(vec![DVec3::ONE; 20])
         .unwrap()
@@ -203,13 +280,20 @@ fn bad_input_gives_named_errors() {
 fn bad_parameters_are_refused_by_name() {
     for (p, name) in [
         (params(2), "depth"),
-        (params(9), "depth"),
+        (params(10), "depth"),
         (
             PoissonParams {
-                smoothing: -1.0,
+                screening: -1.0,
                 ..Default::default()
             },
-            "smoothing",
+            "screening",
+        ),
+        (
+            PoissonParams {
+                scale: 0.5,
+                ..Default::default()
+            },
+            "scale",
         ),
         (
             PoissonParams {
@@ -220,10 +304,10 @@ fn bad_parameters_are_refused_by_name() {
         ),
         (
             PoissonParams {
-                cg_iterations: 0,
+                max_cycles: 0,
                 ..Default::default()
             },
-            "cg_iterations",
+            "max_cycles",
         ),
     ] {
         match Poisson::from_params(p) {

@@ -7,17 +7,22 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PoissonParams {
-    /// Grid depth: `2^depth` nodes per side of the padded cubic box (the usual
-    /// default 8 of Open3D, PCL and PoissonRecon, whose octree depth it matches at the
-    /// finest level).
+    /// Grid depth: `2^depth` cells per side of the padded cubic box (the usual default 8
+    /// of Open3D, PCL and PoissonRecon, whose octree depth it matches at the finest
+    /// level).
     pub depth: usize,
-    /// Width of the Gaussian that spreads each normal into the vector field, in mean
-    /// point spacings: wider fills larger holes and smooths more.
-    pub smoothing: f64,
-    /// Conjugate-gradient iteration cap per grid level.
-    pub cg_iterations: usize,
-    /// Relative residual at which the conjugate gradients stop.
-    pub cg_tolerance: f64,
+    /// Screening weight alpha of Kazhdan & Hoppe 2013 (PoissonRecon's `--pointWeight`,
+    /// default 4); 0 solves the unscreened Poisson equation of Kazhdan et al. 2006.
+    pub screening: f64,
+    /// Side of the cubic grid over the side of the points' bounding cube (Open3D's and
+    /// PoissonRecon's `scale`, 1.1); raised where needed to keep two cells of padding.
+    pub scale: f64,
+    /// Largest number of multigrid V-cycles.
+    pub max_cycles: usize,
+    /// Relative residual `|b - A x| / |b|` at which the V-cycles stop.
+    pub tolerance: f64,
+    /// Gauss-Seidel sweeps before and after the coarse-grid correction of a V-cycle.
+    pub sweeps: usize,
     /// Share of the output vertices with the lowest sample density to remove (0: keep
     /// the watertight surface).
     pub trim_quantile: f64,
@@ -32,9 +37,11 @@ impl Default for PoissonParams {
     fn default() -> Self {
         Self {
             depth: 8,
-            smoothing: 1.0,
-            cg_iterations: 1000,
-            cg_tolerance: 1e-4,
+            screening: 4.0,
+            scale: 1.1,
+            max_cycles: 40,
+            tolerance: 1e-4,
+            sweeps: 2,
             trim_quantile: 0.0,
             trim_radius_cells: 2.0,
             max_flipped_share: 0.2,
@@ -47,22 +54,32 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
     ParamDoc::new(
         "depth",
         Unit::Count,
-        "grid depth: 2^depth nodes per side of the padded cubic box (3..=8)",
+        "grid depth: 2^depth cells per side of the padded cubic box (3..=9)",
     ),
     ParamDoc::new(
-        "smoothing",
-        Unit::Spacing,
-        "width of the Gaussian spreading each normal into the vector field",
-    ),
-    ParamDoc::new(
-        "cg_iterations",
-        Unit::Count,
-        "conjugate-gradient iteration cap per grid level",
-    ),
-    ParamDoc::new(
-        "cg_tolerance",
+        "screening",
         Unit::None,
-        "relative residual at which the conjugate gradients stop",
+        "screening weight alpha (Kazhdan & Hoppe 2013; PoissonRecon's pointWeight); 0: unscreened 2006 equation",
+    ),
+    ParamDoc::new(
+        "scale",
+        Unit::None,
+        "grid side over the points' bounding-cube side (Open3D's and PoissonRecon's scale)",
+    ),
+    ParamDoc::new(
+        "max_cycles",
+        Unit::Count,
+        "largest number of multigrid V-cycles",
+    ),
+    ParamDoc::new(
+        "tolerance",
+        Unit::None,
+        "relative residual at which the V-cycles stop",
+    ),
+    ParamDoc::new(
+        "sweeps",
+        Unit::Count,
+        "Gauss-Seidel sweeps before and after each coarse-grid correction",
     ),
     ParamDoc::new(
         "trim_quantile",
@@ -90,23 +107,32 @@ impl PoissonParams {
                 message,
             })
         };
-        if !(3..=8).contains(&self.depth) {
-            return bad("depth", format!("must be in 3..=8, got {}", self.depth));
+        if !(3..=9).contains(&self.depth) {
+            return bad("depth", format!("must be in 3..=9, got {}", self.depth));
         }
-        if !(self.smoothing.is_finite() && self.smoothing > 0.0) {
-            return bad("smoothing", format!("must be > 0, got {}", self.smoothing));
-        }
-        if !(1..=100_000).contains(&self.cg_iterations) {
+        if !(self.screening.is_finite() && self.screening >= 0.0) {
             return bad(
-                "cg_iterations",
-                format!("must be in 1..=100000, got {}", self.cg_iterations),
+                "screening",
+                format!("must be finite and >= 0, got {}", self.screening),
             );
         }
-        if !(self.cg_tolerance.is_finite() && self.cg_tolerance > 0.0 && self.cg_tolerance < 1.0) {
+        if !(self.scale.is_finite() && (1.0..=4.0).contains(&self.scale)) {
+            return bad("scale", format!("must be in [1, 4], got {}", self.scale));
+        }
+        if !(1..=1000).contains(&self.max_cycles) {
             return bad(
-                "cg_tolerance",
-                format!("must be in (0, 1), got {}", self.cg_tolerance),
+                "max_cycles",
+                format!("must be in 1..=1000, got {}", self.max_cycles),
             );
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0 && self.tolerance < 1.0) {
+            return bad(
+                "tolerance",
+                format!("must be in (0, 1), got {}", self.tolerance),
+            );
+        }
+        if !(1..=50).contains(&self.sweeps) {
+            return bad("sweeps", format!("must be in 1..=50, got {}", self.sweeps));
         }
         if !(0.0..1.0).contains(&self.trim_quantile) {
             return bad(
