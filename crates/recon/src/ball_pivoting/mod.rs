@@ -19,8 +19,7 @@
 //!
 //! Files: [`params`], `input` (checks and deduplication, shared with `poisson`),
 //! `geometry` (ball centres, pivot contacts), `grid` (neighbour rows), `nearest` (each
-//! point's nearest other point, for the spacing), `mesher` (front,
-//! seeds, pivoting).
+//! point's nearest other point, for the spacing), `mesher` (front, seeds, pivoting).
 
 mod geometry;
 mod grid;
