@@ -9,7 +9,8 @@ use std::hash::{Hash, Hasher};
 use glam::DVec3;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::MethodError;
-use reconbench_geom::spatial::knn_self_table;
+
+use super::nearest::nearest_others;
 
 /// The deduplicated, checked input.
 #[derive(Debug)]
@@ -115,10 +116,12 @@ pub(crate) fn prepare(
     if zero_normals == nrm.len() {
         return Err(invalid(name, "every normal is zero".into()));
     }
-    let knn = knn_self_table(&pos, 1, true)?;
-    let spacing = knn.dist2.iter().map(|d| d.sqrt()).sum::<f64>() / pos.len() as f64;
+    // The nearest other point of each (as `knn_self_table(&pos, 1, true)`, from a grid);
+    // the distances summed in point order.
+    let nn = nearest_others(&pos)?;
+    let spacing = nn.iter().map(|&(_, d2)| d2.sqrt()).sum::<f64>() / pos.len() as f64;
     let flipped = (0..pos.len())
-        .filter(|&i| nrm[i].dot(nrm[knn.indices(i)[0] as usize]) < 0.0)
+        .filter(|&i| nrm[i].dot(nrm[nn[i].0 as usize]) < 0.0)
         .count();
     let flipped_share = flipped as f64 / pos.len() as f64;
     if flipped_share > max_flipped_share {

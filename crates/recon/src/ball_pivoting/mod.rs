@@ -18,13 +18,14 @@
 //! normals. See `docs/methods/ball_pivoting.md`.
 //!
 //! Files: [`params`], `input` (checks and deduplication, shared with `poisson`),
-//! `geometry` (ball centres, pivot contacts), `grid` (neighbour rows), `mesher` (front,
-//! seeds, pivoting).
+//! `geometry` (ball centres, pivot contacts), `grid` (neighbour rows), `nearest` (each
+//! point's nearest other point, for the spacing), `mesher` (front, seeds, pivoting).
 
 mod geometry;
 mod grid;
 pub(crate) mod input;
 mod mesher;
+mod nearest;
 pub mod params;
 
 use reconbench_geom::cloud::WORKING_SCALE_BITS;
