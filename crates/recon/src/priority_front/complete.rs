@@ -517,13 +517,13 @@ fn covers(pts: &[DVec3], t: [u32; 3], p: DVec3) -> Option<(f64, f64)> {
 }
 
 /// Faces incident to each vertex, in compressed rows.
-struct VertexFaces {
+pub(super) struct VertexFaces {
     start: Vec<u32>,
     faces: Vec<u32>,
 }
 
 impl VertexFaces {
-    fn new(n: usize, tris: &[[u32; 3]]) -> Self {
+    pub(super) fn new(n: usize, tris: &[[u32; 3]]) -> Self {
         let mut start = vec![0u32; n + 1];
         for t in tris {
             for &v in t {
@@ -544,7 +544,8 @@ impl VertexFaces {
         Self { start, faces }
     }
 
-    fn of(&self, v: u32) -> &[u32] {
+    /// The faces around vertex `v`.
+    pub(super) fn of(&self, v: u32) -> &[u32] {
         &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
     }
 }

@@ -2,6 +2,8 @@
 
 use glam::DVec3;
 
+use super::complete::VertexFaces;
+
 /// Volumes below this share of a piece's area x reach are rounding noise.
 const FLAT: f64 = 1e-9;
 
@@ -167,36 +169,16 @@ const FACING_MIN: f64 = 0.5;
 /// tan 30°: the largest elevation of a facing edge above an edge's triangle plane.
 const TAN_30: f64 = 0.577_350_269_189_625_8;
 
-/// The faces around each vertex, as flat rows.
-struct FaceTopology {
-    start: Vec<u32>,
-    around: Vec<u32>,
-}
+/// The faces around each vertex, with the rim and piece queries of the last step.
+struct FaceTopology(VertexFaces);
 
 impl FaceTopology {
     fn new(n: usize, faces: &[[u32; 3]]) -> Self {
-        let mut start = vec![0u32; n + 1];
-        for f in faces {
-            for &v in f {
-                start[v as usize + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            start[i + 1] += start[i];
-        }
-        let mut fill = start.clone();
-        let mut around = vec![0u32; 3 * faces.len()];
-        for (fi, f) in faces.iter().enumerate() {
-            for &v in f {
-                around[fill[v as usize] as usize] = fi as u32;
-                fill[v as usize] += 1;
-            }
-        }
-        Self { start, around }
+        Self(VertexFaces::new(n, faces))
     }
 
     fn row(&self, v: u32) -> &[u32] {
-        &self.around[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+        self.0.of(v)
     }
 
     /// The edges `a -> b` of face `f` that no other face shares (its part of a rim),
