@@ -10,7 +10,9 @@
 //!    (more than 150 degrees) and no ear crossing a mesh face or another ear (the exact
 //!    test of IMPL-CHOICE I14). Otherwise nothing is added to it. A hole wider than
 //!    `max_edge` (a scan hole, an open end) cannot be closed under that bound and is
-//!    kept, with its rim untouched; a slit between two fronts is zipped.
+//!    kept, with its rim untouched; a slit between two fronts is zipped. A loop whose
+//!    greedy ears run into a dead end is then triangulated by the least-fold programme
+//!    of `fill_dp.rs` under the same bounds (`fill_holes_dp`).
 //! 2. [`insert_covered`]: every point left unmeshed that projects into a triangle
 //!    within the I12 height bound of it (the definition of a covered point) and lies on
 //!    the plane of its neighbours (`insert_height`, `insert_rel`: so that outliers near
@@ -30,15 +32,15 @@ use super::mesher::{ACCEPTED, Mesher, tri_normal};
 /// Cosine of the largest fold allowed between an ear and the face across its old edges
 /// (150 degrees: an acute crease, such as the fandisk's, stays closable; a sheet folded
 /// back onto itself does not).
-const COS_MAX_FOLD: f64 = -0.866;
+pub(super) const COS_MAX_FOLD: f64 = -0.866;
 
 /// One planned ear: the loop corner it removes (`z -> a -> b`) and its normal.
 #[derive(Clone, Copy)]
-struct Ear {
-    z: u32,
-    a: u32,
-    b: u32,
-    n: DVec3,
+pub(super) struct Ear {
+    pub(super) z: u32,
+    pub(super) a: u32,
+    pub(super) b: u32,
+    pub(super) n: DVec3,
 }
 
 impl Mesher<'_> {
@@ -74,8 +76,9 @@ impl Mesher<'_> {
     /// Closes every loop of at most `max_len` vertices that ear clipping can close whole
     /// under the bounds of the module doc: new edges at most `max_edge`, or `edge_rel`
     /// times the loop's longest edge where that is longer (sparse regions, where the
-    /// input's own spacing exceeds R). Returns the number of loops closed.
-    pub fn fill_holes(&mut self, max_edge: f64, edge_rel: f64, max_len: usize) -> u64 {
+    /// input's own spacing exceeds R). With `dp`, a loop the ears cannot close is given
+    /// to the least-fold programme (`fill_dp.rs`). Returns the number of loops closed.
+    pub fn fill_holes(&mut self, max_edge: f64, edge_rel: f64, max_len: usize, dp: bool) -> u64 {
         if max_edge <= 0.0 {
             return 0;
         }
@@ -98,7 +101,12 @@ impl Mesher<'_> {
             let longest = (0..k)
                 .map(|i| self.pts[l[i] as usize].distance(self.pts[l[(i + 1) % k] as usize]))
                 .fold(0.0, f64::max);
-            if let Some(plan) = self.plan_fill(&l, max_edge.max(edge_rel * longest)) {
+            let bound = max_edge.max(edge_rel * longest);
+            let plan = match self.plan_fill(&l, bound) {
+                None if dp => self.plan_fill_dp(&l, bound),
+                plan => plan,
+            };
+            if let Some(plan) = plan {
                 self.apply_fill(&plan);
                 closed += 1;
             }
@@ -195,7 +203,7 @@ impl Mesher<'_> {
 }
 
 /// Whether triangle `tri` crosses a planned ear that shares none of its vertices.
-fn crosses_planned(pts: &[DVec3], plan: &[Ear], tri: [u32; 3]) -> bool {
+pub(super) fn crosses_planned(pts: &[DVec3], plan: &[Ear], tri: [u32; 3]) -> bool {
     let p = tri.map(|i| pts[i as usize]);
     plan.iter().any(|e| {
         let t = [e.z, e.b, e.a];

@@ -28,6 +28,7 @@ mod adjacency;
 mod complete;
 mod cross;
 mod density;
+mod fill_dp;
 mod grid;
 mod holes;
 mod mesher;
@@ -494,7 +495,12 @@ fn stitch_phase(
 /// IMPL-CHOICE I15, holes: the loops that close whole under `fill_holes_max_edge` R.
 fn fill_phase(m: &mut Mesher, p: &PriorityFrontParams) -> u64 {
     let max_edge = p.fill_holes_max_edge * m.cfg.r;
-    m.fill_holes(max_edge, p.fill_holes_edge_rel, p.fill_holes_max_loop)
+    m.fill_holes(
+        max_edge,
+        p.fill_holes_edge_rel,
+        p.fill_holes_max_loop,
+        p.fill_holes_dp,
+    )
 }
 
 /// IMPL-CHOICE I15, points (timed as `complete`): the unmeshed points covered by a
@@ -590,7 +596,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},insert:{},plane_h<=max({}rho,{}rms) threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{},insert:{},plane_h<=max({}rho,{}rms) threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -624,6 +630,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.fill_holes_max_edge,
         p.fill_holes_edge_rel,
         p.fill_holes_max_loop,
+        p.fill_holes_dp,
         p.insert_covered,
         p.insert_height,
         p.insert_rel,

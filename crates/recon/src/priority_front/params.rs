@@ -181,7 +181,7 @@ pub struct PriorityFrontParams {
     pub close_holes_max: usize,
     /// Surface completion, holes (IMPL-CHOICE I15, a deviation; issue 20): after
     /// growth, every loop that ear clipping closes whole with new edges at most this
-    /// many R long (no fold over 120 degrees, no crossing) is closed; wider holes are
+    /// many R long (no fold over 150 degrees, no crossing) is closed; wider holes are
     /// kept untouched. 0 = off (the paper). Default 1.
     pub fill_holes_max_edge: f64,
     /// I15: where the loop's own longest edge times this exceeds `fill_holes_max_edge`
@@ -191,6 +191,11 @@ pub struct PriorityFrontParams {
     /// Loops of more vertices than this are not tried by the I15 hole fill (cost
     /// bound; default 4096).
     pub fill_holes_max_loop: usize,
+    /// I15: a loop that greedy ear clipping cannot close is triangulated by dynamic
+    /// programming instead (the least-folded triangulation over all that use only the
+    /// loop's vertices, under the same bounds; loops of at most 400 vertices). false =
+    /// ears only. Default true.
+    pub fill_holes_dp: bool,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
     /// projects into a triangle within the I12 height bound of it (a covered point) is
     /// inserted there. false = the paper (such points are refused). Default true.
@@ -275,6 +280,7 @@ impl Default for PriorityFrontParams {
             fill_holes_max_edge: 1.0,
             fill_holes_edge_rel: 1.5,
             fill_holes_max_loop: 4096,
+            fill_holes_dp: true,
             insert_covered: true,
             insert_height: 0.1,
             insert_rel: 3.0,
