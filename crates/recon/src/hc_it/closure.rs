@@ -27,7 +27,7 @@ use std::collections::VecDeque;
 
 use glam::DVec3;
 
-use super::mesh::{Mesh, NONE, angle, circumradius, cross, crosses, min_angle, rotate_to};
+use super::mesh::{Mesh, NONE, angle, circumradius, cross, min_angle, rotate_to};
 
 /// Sweep triangles with an edge longer than this many rho are left out: they are the
 /// bridges of the winner fallback (the nearest boundary edge of the whole NC when none
@@ -161,10 +161,8 @@ fn join_fans<'b>(
 
 /// Outgoing boundary edges at `v`: more than one means several fans (a non-manifold
 /// vertex).
-fn gaps_at(mesh: &Mesh, v: u32, buf: &mut Vec<(u32, u32, u32)>) -> usize {
-    buf.clear();
-    mesh.boundary_at(v, buf);
-    buf.iter().filter(|e| e.0 == v).count()
+fn gaps_at(mesh: &Mesh, v: u32) -> usize {
+    mesh.boundary_out(v) as usize
 }
 
 /// [`join_fans`] at one vertex; returns the triangles added.
@@ -176,9 +174,11 @@ fn join_at<'b>(
     v: u32,
     buf: &mut Vec<(u32, u32, u32)>,
 ) -> usize {
-    if gaps_at(mesh, v, buf) <= 1 {
+    if gaps_at(mesh, v) <= 1 {
         return 0;
     }
+    buf.clear();
+    mesh.boundary_at(v, buf);
     let loose = ZipOpts {
         max_radius: f64::INFINITY,
         ..o.clone()
@@ -240,31 +240,21 @@ const SLIT_ANGLE: f64 = 0.5;
 fn split_slits(mesh: &mut Mesh, p: &[DVec3], theta: f64) -> usize {
     let mut queue: VecDeque<(u32, u32)> = boundary_edges(mesh).collect();
     let mut buf = Vec::new();
+    let mut cands: Vec<(u32, u32)> = Vec::new();
     let mut split = 0;
     while let Some((u, v)) = queue.pop_front() {
         if !mesh.is_boundary(u, v) {
             continue;
         }
-        // Boundary neighbours: y after v (v -> y) and x before u (x -> u).
+        // Boundary neighbours: y after v (v -> y), then x before u (x -> u).
+        cands.clear();
         buf.clear();
         mesh.boundary_at(v, &mut buf);
-        let after: Vec<u32> = buf
-            .iter()
-            .filter(|&&(a, _, _)| a == v)
-            .map(|&(_, b, _)| b)
-            .collect();
+        cands.extend(buf.iter().filter(|e| e.0 == v).map(|e| (e.1, v)));
         buf.clear();
         mesh.boundary_at(u, &mut buf);
-        let before: Vec<u32> = buf
-            .iter()
-            .filter(|&&(_, b, _)| b == u)
-            .map(|&(a, _, _)| a)
-            .collect();
-        let cands = after
-            .into_iter()
-            .map(|y| (y, v))
-            .chain(before.into_iter().map(|x| (x, u)));
-        for (y, at) in cands {
+        cands.extend(buf.iter().filter(|e| e.1 == u).map(|e| (e.0, u)));
+        for &(y, at) in &cands {
             if let Some((e1, e2)) = try_split(mesh, p, theta, u, v, y, at) {
                 split += 1;
                 queue.push_back(e1);
@@ -346,18 +336,36 @@ const FILL_MAX_EDGES: usize = 16;
 /// added.
 fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -> usize {
     let edges: Vec<(u32, u32)> = boundary_edges(mesh).collect();
-    let mut out: foldhash::HashMap<u32, Vec<u32>> = foldhash::HashMap::default();
-    for &(a, b) in &edges {
-        out.entry(a).or_default().push(b);
+    // The outgoing boundary edges of each vertex in edge order, as flat arrays: `start`
+    // indexes `head` by vertex, `pos[i]` is edge i's slot.
+    let n = p.len();
+    let mut start = vec![0u32; n + 1];
+    for &(a, _) in &edges {
+        start[a as usize + 1] += 1;
     }
-    let mut used: foldhash::HashSet<(u32, u32)> = foldhash::HashSet::default();
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut head = vec![0u32; edges.len()];
+    let mut pos = vec![0u32; edges.len()];
+    for (i, &(a, b)) in edges.iter().enumerate() {
+        let f = &mut fill[a as usize];
+        head[*f as usize] = b;
+        pos[i] = *f;
+        *f += 1;
+    }
+    // Slots of the edges of the loops found so far.
+    let mut used = vec![false; edges.len()];
     let mut loops = Vec::new();
-    for &(a0, b0) in &edges {
-        if used.contains(&(a0, b0)) {
+    let mut trace: Vec<u32> = Vec::new();
+    for (i, &(a0, b0)) in edges.iter().enumerate() {
+        if used[pos[i] as usize] {
             continue;
         }
         // Edges of a loop are marked once it closes; an open trace marks nothing.
-        let mut trace = vec![(a0, b0)];
+        trace.clear();
+        trace.push(pos[i]);
         let mut lp = vec![a0];
         let (mut u, mut v) = (a0, b0);
         let closed = loop {
@@ -370,38 +378,44 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
             lp.push(v);
             // At a vertex with several outgoing boundary edges (a bow-tie), the one that
             // turns least counter-clockwise from the way back bounds the same gap.
-            let n = cross(p, mesh.tris[mesh.edge_tris(u, v)[0] as usize]);
-            let back = p[u as usize] - p[v as usize];
-            let next = out.get(&v).and_then(|ws| {
-                let free: Vec<u32> = ws
-                    .iter()
-                    .copied()
-                    .filter(|&w| !used.contains(&(v, w)) && !trace.contains(&(v, w)))
-                    .collect();
-                if free.len() == 1 {
-                    return Some(free[0]);
+            let slots = start[v as usize]..start[v as usize + 1];
+            let free = |k: &u32| !used[*k as usize] && !trace.contains(k);
+            let next = if slots.clone().filter(free).count() <= 1 {
+                slots.clone().find(free)
+            } else {
+                let n = cross(p, mesh.tris[mesh.edge_tris(u, v)[0] as usize]);
+                let back = p[u as usize] - p[v as usize];
+                let ccw = |w: u32| {
+                    let d = p[w as usize] - p[v as usize];
+                    let a = back.cross(d).dot(n).atan2(back.dot(d));
+                    if a <= 0.0 {
+                        a + std::f64::consts::TAU
+                    } else {
+                        a
+                    }
+                };
+                let mut best: Option<u32> = None;
+                for k in slots.clone().filter(free) {
+                    let w = head[k as usize];
+                    if best.is_none_or(|b| {
+                        let bw = head[b as usize];
+                        ccw(w).total_cmp(&ccw(bw)).then(w.cmp(&bw)).is_lt()
+                    }) {
+                        best = Some(k);
+                    }
                 }
-                free.into_iter().min_by(|&x, &y| {
-                    let ccw = |w: u32| {
-                        let d = p[w as usize] - p[v as usize];
-                        let a = back.cross(d).dot(n).atan2(back.dot(d));
-                        if a <= 0.0 {
-                            a + std::f64::consts::TAU
-                        } else {
-                            a
-                        }
-                    };
-                    ccw(x).total_cmp(&ccw(y)).then(x.cmp(&y))
-                })
-            });
-            let Some(w) = next else {
+                best
+            };
+            let Some(k) = next else {
                 break false;
             };
-            trace.push((v, w));
-            (u, v) = (v, w);
+            trace.push(k);
+            (u, v) = (v, head[k as usize]);
         };
         if closed && lp.len() >= 3 {
-            used.extend(trace);
+            for &k in &trace {
+                used[k as usize] = true;
+            }
             loops.push(lp);
         }
     }
@@ -502,6 +516,7 @@ pub fn zip<'b>(
         buf: Vec::new(),
         cands: Vec::new(),
         tried: 0,
+        failed: foldhash::HashMap::default(),
     };
     // Phase 1 never gives a vertex a second fan; phase 2 may (to bridge two pieces that
     // meet along a crack without a common vertex), and its later rounds fill the gaps;
@@ -535,6 +550,8 @@ pub fn zip<'b>(
     let (m, cut) = cut_fans(mesh, p.len());
     mesh = m;
     stats.cut = cut;
+    // A rebuilt mesh has a new clock: the recorded failures no longer apply.
+    ctx.failed.clear();
     if cut > 0 {
         for bowtie in [false, true] {
             for _ in 0..MAX_ROUNDS {
@@ -571,6 +588,34 @@ struct Rounds {
     buf: Vec<(u32, u32, u32)>,
     cands: Vec<(f64, u32)>,
     tried: usize,
+    /// Boundary edges whose closing failed: the mesh clock after the attempt, and the
+    /// phase (`bowtie`) it ran in.
+    failed: foldhash::HashMap<(u32, u32), (u64, bool)>,
+}
+
+impl Rounds {
+    /// Whether closing a -> b in phase `bowtie` is known to fail: it failed in the same
+    /// phase and no triangle at a, b or a's rho-neighbours changed since. Everything
+    /// [`close_edge`] reads is a triangle at one of those points (c is one of the
+    /// neighbours; the overlap and inside tests look at the neighbours' triangles), so it
+    /// would fail again: skipping it gives the same mesh.
+    fn known_to_fail<'b>(
+        &self,
+        mesh: &Mesh,
+        nbrs: &impl Fn(u32) -> &'b [u32],
+        a: u32,
+        b: u32,
+        bowtie: bool,
+    ) -> bool {
+        match self.failed.get(&(a, b)) {
+            Some(&(at, phase)) if phase == bowtie => {
+                mesh.stamp(a) <= at
+                    && mesh.stamp(b) <= at
+                    && nbrs(a).iter().all(|&v| mesh.stamp(v) <= at)
+            }
+            _ => false,
+        }
+    }
 }
 
 impl Rounds {
@@ -592,31 +637,23 @@ impl Rounds {
             if self.tried.is_multiple_of(4096) {
                 checkpoint()?;
             }
-            if !mesh.is_boundary(a, b) {
+            if !mesh.is_boundary(a, b) || self.known_to_fail(mesh, nbrs, a, b, bowtie) {
                 continue;
             }
-            let Some(c) = close_edge(
-                mesh,
-                p,
-                nbrs,
-                o,
-                a,
-                b,
-                bowtie,
-                &mut self.buf,
-                &mut self.cands,
-            ) else {
+            let Some(c) = close_edge(mesh, p, nbrs, o, a, b, bowtie, &mut self.cands) else {
+                self.failed.insert((a, b), (mesh.clock(), bowtie));
                 continue;
             };
             let mut n_new = 1;
-            if bowtie && gaps_at(mesh, c, &mut self.buf) > 1 {
+            if bowtie && gaps_at(mesh, c) > 1 {
                 // A bridge to another fan of c is kept only if the gap it leaves between
                 // the fans closes at once, so no vertex is left with two fans.
                 n_new += join_at(mesh, p, nbrs, o, c, &mut self.buf);
-                if gaps_at(mesh, c, &mut self.buf) > 1 {
+                if gaps_at(mesh, c) > 1 {
                     for _ in 0..n_new {
                         mesh.pop();
                     }
+                    self.failed.insert((a, b), (mesh.clock(), bowtie));
                     continue;
                 }
             }
@@ -692,7 +729,7 @@ fn unfold<'b>(
     for (t, k) in tris.into_iter().zip(keep) {
         let long =
             (0..3).any(|k| p[t[k] as usize].distance_squared(p[t[(k + 1) % 3] as usize]) > bridge2);
-        if k && !long && !overlaps(&mesh, p, t, nbrs(t[0])) && mesh.add(t).is_some() {
+        if k && !long && !overlaps(&mut mesh, p, t, nbrs(t[0])) && mesh.add(t).is_some() {
             continue;
         }
         dropped += 1;
@@ -710,7 +747,11 @@ fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
 /// `near` (those whose centroid is within t's longest edge of t's plane): seen along t's
 /// normal, an edge of one crosses an edge of the other, or a vertex of one lies inside
 /// the other (shared vertices and edges excepted).
-fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
+///
+/// Each triangle is tested once (it is reached from up to three of the points), and
+/// the 18 orientations a pair needs are computed once: the crossing tests and the
+/// inside tests use the same signs (the same expressions as `mesh::crosses`).
+fn overlaps(mesh: &mut Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
     let n_t = cross(p, t);
     if n_t.length_squared() == 0.0 {
         return true;
@@ -721,35 +762,36 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
     let reach = (0..3)
         .map(|k| (p[t[k] as usize] - p[t[(k + 1) % 3] as usize]).length())
         .fold(0.0, f64::max);
-    let inside = |tri: [u32; 3], q: u32| {
-        if tri.contains(&q) {
-            return false;
-        }
-        let x = p[q as usize];
-        let side = |a: u32, b: u32| {
-            let (pa, pb) = (p[a as usize], p[b as usize]);
-            (pb - pa).cross(x - pa).dot(nu)
-        };
-        let s = [
-            side(tri[0], tri[1]),
-            side(tri[1], tri[2]),
-            side(tri[2], tri[0]),
-        ];
-        (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
-    };
+    let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nu);
+    let pt = t.map(|v| p[v as usize]);
     // Only triangles whose box meets t's box grown by `reach` can overlap it.
     let (lo, hi) = bbox(p, t);
     let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
+    mesh.new_visit();
     for &x in t.iter().chain(near) {
-        for &f in &mesh.vt[x as usize] {
+        for i in 0..mesh.vt[x as usize].len() {
+            let f = mesh.vt[x as usize][i];
+            if !mesh.visit(f) {
+                continue;
+            }
             let o = mesh.tris[f as usize];
             let (olo, ohi) = bbox(p, o);
             if olo.cmpgt(hi).any() || ohi.cmplt(lo).any() {
                 continue;
             }
-            let oc = (p[o[0] as usize] + p[o[1] as usize] + p[o[2] as usize]) / 3.0;
+            let po = o.map(|v| p[v as usize]);
+            let oc = (po[0] + po[1] + po[2]) / 3.0;
             if (oc - p0).dot(nu).abs() > reach {
                 continue;
+            }
+            // d[k][j]: o[j] against t's edge k; e[j][k]: t[k] against o's edge j.
+            let mut d = [[0.0; 3]; 3];
+            let mut e = [[0.0; 3]; 3];
+            for k in 0..3 {
+                for j in 0..3 {
+                    d[k][j] = orient(pt[k], pt[(k + 1) % 3], po[j]);
+                    e[j][k] = orient(po[j], po[(j + 1) % 3], pt[k]);
+                }
             }
             for k in 0..3 {
                 let (u, v) = (t[k], t[(k + 1) % 3]);
@@ -758,19 +800,26 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
                     if r == u || r == v || s == u || s == v {
                         continue;
                     }
-                    if crosses(
-                        nu,
-                        p[u as usize],
-                        p[v as usize],
-                        p[r as usize],
-                        p[s as usize],
-                    ) {
+                    // `crosses(nu, t[k], t[k + 1], o[j], o[j + 1])`.
+                    let (d1, d2) = (d[k][j], d[k][(j + 1) % 3]);
+                    let (d3, d4) = (e[j][k], e[j][(k + 1) % 3]);
+                    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
                         return true;
                     }
                 }
             }
-            if o.iter().any(|&q| inside(t, q)) || t.iter().any(|&q| inside(o, q)) {
-                return true;
+            let strictly_inside = |s: [f64; 3]| {
+                (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
+            };
+            for j in 0..3 {
+                if !t.contains(&o[j]) && strictly_inside([d[0][j], d[1][j], d[2][j]]) {
+                    return true;
+                }
+            }
+            for k in 0..3 {
+                if !o.contains(&t[k]) && strictly_inside([e[0][k], e[1][k], e[2][k]]) {
+                    return true;
+                }
             }
         }
     }
@@ -779,11 +828,9 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
 
 /// The directed boundary edges of `mesh`, in triangle order.
 fn boundary_edges(mesh: &Mesh) -> impl Iterator<Item = (u32, u32)> + '_ {
-    mesh.tris.iter().flat_map(move |t| {
-        (0..3).filter_map(move |k| {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            (mesh.edge_tris(a, b)[1] == NONE).then_some((a, b))
-        })
+    mesh.tris.iter().enumerate().flat_map(move |(id, t)| {
+        let bits = mesh.boundary_bits(id as u32);
+        (0..3).filter_map(move |k| (bits & (1 << k) != 0).then_some((t[k], t[(k + 1) % 3])))
     })
 }
 
@@ -802,7 +849,6 @@ fn close_edge<'b>(
     a: u32,
     b: u32,
     bowtie: bool,
-    buf: &mut Vec<(u32, u32, u32)>,
     cands: &mut Vec<(f64, u32)>,
 ) -> Option<u32> {
     let w = mesh.edge_tris(a, b)[0];
@@ -819,9 +865,7 @@ fn close_edge<'b>(
             continue;
         }
         if !mesh.vt[c as usize].is_empty() {
-            buf.clear();
-            mesh.boundary_at(c, buf);
-            if buf.is_empty() {
+            if !mesh.on_boundary(c) {
                 continue;
             }
             if !bowtie && !mesh.has_edge(a, c) && !mesh.has_edge(c, b) {

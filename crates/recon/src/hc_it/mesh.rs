@@ -74,6 +74,12 @@ pub fn rotate_to(t: [u32; 3], a: u32) -> [u32; 3] {
 }
 
 /// The mesh under construction.
+///
+/// Besides the edge map it keeps, updated on every link and unlink, what the closure
+/// pass and the winner fallback would otherwise recompute by walking every triangle:
+/// the boundary edges of each triangle as bits, the outgoing and incoming boundary
+/// edges of each vertex, a modification stamp per vertex and, when asked for, a log of
+/// the directed edges that became boundary edges.
 #[derive(Debug, Default)]
 pub struct Mesh {
     /// Triangles in stored order (orientation from their NC's first triangle).
@@ -81,6 +87,23 @@ pub struct Mesh {
     edges: HashMap<u64, [u32; 2]>,
     /// Triangles incident to each vertex.
     pub vt: Vec<Vec<u32>>,
+    /// Bit k of `bmask[t]`: edge `t[k] -> t[k + 1]` is a boundary edge (t is its only
+    /// triangle).
+    bmask: Vec<u8>,
+    /// Boundary edges leaving / entering each vertex.
+    bout: Vec<u32>,
+    bin: Vec<u32>,
+    /// Number of links and unlinks so far, and its value at the last change of a
+    /// triangle at each vertex.
+    clock: u64,
+    stamp: Vec<u64>,
+    /// Directed edges that became boundary edges, in order (only after
+    /// [`Self::log_boundary`]).
+    log: Vec<(u32, u32)>,
+    logging: bool,
+    /// Visit marks of triangles for [`Self::visit`] (generation `mark_gen`).
+    mark: Vec<u32>,
+    mark_gen: u32,
 }
 
 impl Mesh {
@@ -90,6 +113,79 @@ impl Mesh {
             tris: Vec::new(),
             edges: HashMap::default(),
             vt: vec![Vec::new(); n],
+            bmask: Vec::new(),
+            bout: vec![0; n],
+            bin: vec![0; n],
+            clock: 0,
+            stamp: vec![0; n],
+            log: Vec::new(),
+            logging: false,
+            mark: Vec::new(),
+            mark_gen: 0,
+        }
+    }
+
+    /// Starts logging the directed edges that become boundary edges (see
+    /// [`Self::boundary_log`]).
+    pub fn log_boundary(&mut self) {
+        self.logging = true;
+    }
+
+    /// Every directed edge that became a boundary edge since logging started, in order
+    /// (an entry may since have stopped being one, or appear again).
+    pub fn boundary_log(&self) -> &[(u32, u32)] {
+        &self.log
+    }
+
+    /// Whether `v` has a boundary edge (equivalently, [`Self::boundary_at`] finds one).
+    #[inline]
+    pub fn on_boundary(&self, v: u32) -> bool {
+        self.bout[v as usize] + self.bin[v as usize] > 0
+    }
+
+    /// Boundary edges leaving `v`: more than one means several fans at `v`.
+    #[inline]
+    pub fn boundary_out(&self, v: u32) -> u32 {
+        self.bout[v as usize]
+    }
+
+    /// The boundary-edge bits of triangle `t` (bit k: edge `t[k] -> t[k + 1]`).
+    #[inline]
+    pub fn boundary_bits(&self, t: u32) -> u8 {
+        self.bmask[t as usize]
+    }
+
+    /// The modification clock: it advances whenever a triangle is linked or unlinked.
+    #[inline]
+    pub fn clock(&self) -> u64 {
+        self.clock
+    }
+
+    /// The clock at the last change of a triangle at `v` (0 if none).
+    #[inline]
+    pub fn stamp(&self, v: u32) -> u64 {
+        self.stamp[v as usize]
+    }
+
+    /// Starts a new visit: afterwards [`Self::visit`] returns true once per triangle.
+    pub fn new_visit(&mut self) {
+        self.mark.resize(self.tris.len(), 0);
+        self.mark_gen = self.mark_gen.wrapping_add(1);
+        if self.mark_gen == 0 {
+            self.mark.fill(0);
+            self.mark_gen = 1;
+        }
+    }
+
+    /// Whether triangle `t` is seen for the first time since [`Self::new_visit`].
+    #[inline]
+    pub fn visit(&mut self, t: u32) -> bool {
+        let m = &mut self.mark[t as usize];
+        if *m == self.mark_gen {
+            false
+        } else {
+            *m = self.mark_gen;
+            true
         }
     }
 
@@ -124,10 +220,14 @@ impl Mesh {
     /// `out` as `(a, b, triangle)`.
     pub fn boundary_at(&self, v: u32, out: &mut Vec<(u32, u32, u32)>) {
         for &t in &self.vt[v as usize] {
+            let bits = self.bmask[t as usize];
+            if bits == 0 {
+                continue;
+            }
             let tri = self.tris[t as usize];
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                if (a == v || b == v) && self.edge_tris(a, b)[1] == NONE {
+                if (a == v || b == v) && bits & (1 << k) != 0 {
                     out.push((a, b, t));
                 }
             }
@@ -154,6 +254,7 @@ impl Mesh {
         }
         let id = self.tris.len() as u32;
         self.tris.push(t);
+        self.bmask.push(0);
         self.link(id, t);
         Some(id)
     }
@@ -163,19 +264,64 @@ impl Mesh {
         if let Some(last) = self.tris.len().checked_sub(1) {
             self.unlink(last as u32);
             self.tris.pop();
+            self.bmask.pop();
+        }
+    }
+
+    /// Slot k of triangle `t` whose edge is {a, b}, with the edge as `t` traverses it.
+    fn slot(&self, t: u32, a: u32, b: u32) -> Option<(usize, u32, u32)> {
+        let tri = self.tris[t as usize];
+        (0..3).find_map(|k| {
+            let (x, y) = (tri[k], tri[(k + 1) % 3]);
+            ((x == a && y == b) || (x == b && y == a)).then_some((k, x, y))
+        })
+    }
+
+    /// Marks slot k (edge x -> y) of triangle `t` as a boundary edge or not.
+    fn set_boundary(&mut self, t: u32, k: usize, x: u32, y: u32, on: bool) {
+        let bit = 1u8 << k;
+        let m = &mut self.bmask[t as usize];
+        if on && *m & bit == 0 {
+            *m |= bit;
+            self.bout[x as usize] += 1;
+            self.bin[y as usize] += 1;
+            if self.logging {
+                self.log.push((x, y));
+            }
+        } else if !on && *m & bit != 0 {
+            *m &= !bit;
+            self.bout[x as usize] -= 1;
+            self.bin[y as usize] -= 1;
+        }
+    }
+
+    /// Advances the clock and stamps the vertices of `t`.
+    fn touch(&mut self, t: [u32; 3]) {
+        self.clock += 1;
+        for v in t {
+            self.stamp[v as usize] = self.clock;
         }
     }
 
     fn link(&mut self, id: u32, t: [u32; 3]) {
+        self.touch(t);
         for k in 0..3 {
-            let e = self
-                .edges
-                .entry(key(t[k], t[(k + 1) % 3]))
-                .or_insert([NONE, NONE]);
-            if e[0] == NONE {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let e = self.edges.entry(key(a, b)).or_insert([NONE, NONE]);
+            let other = if e[0] == NONE {
                 e[0] = id;
+                NONE
             } else {
                 e[1] = id;
+                e[0]
+            };
+            if other == NONE {
+                self.set_boundary(id, k, a, b, true);
+            } else {
+                if let Some((j, x, y)) = self.slot(other, a, b) {
+                    self.set_boundary(other, j, x, y, false);
+                }
+                self.set_boundary(id, k, a, b, false);
             }
             self.vt[t[k] as usize].push(id);
         }
@@ -183,16 +329,26 @@ impl Mesh {
 
     fn unlink(&mut self, id: u32) {
         let t = self.tris[id as usize];
+        self.touch(t);
         for k in 0..3 {
-            let kk = key(t[k], t[(k + 1) % 3]);
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let kk = key(a, b);
+            let mut left = NONE;
             if let Some(e) = self.edges.get_mut(&kk) {
                 if e[0] == id {
                     e[0] = e[1];
                 }
                 e[1] = NONE;
+                left = e[0];
                 if e[0] == NONE {
                     self.edges.remove(&kk);
                 }
+            }
+            self.set_boundary(id, k, a, b, false);
+            if left != NONE
+                && let Some((j, x, y)) = self.slot(left, a, b)
+            {
+                self.set_boundary(left, j, x, y, true);
             }
             let l = &mut self.vt[t[k] as usize];
             if let Some(pos) = l.iter().position(|&x| x == id) {
