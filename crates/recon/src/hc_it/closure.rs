@@ -78,6 +78,7 @@ pub struct ZipStats {
 fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     let mut drop = vec![false; mesh.tris.len()];
     let mut fan: Vec<(u32, u32)> = Vec::new();
+    let mut stack: Vec<u32> = Vec::new();
     for v in 0..n as u32 {
         let ts = &mesh.vt[v as usize];
         if ts.len() < 2 {
@@ -92,20 +93,19 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
                 continue;
             }
             fan[s].1 = label;
-            let mut stack = vec![fan[s].0];
+            stack.clear();
+            stack.push(fan[s].0);
             while let Some(t) = stack.pop() {
                 let tri = mesh.tris[t as usize];
                 for &w in &tri {
                     if w == v {
                         continue;
                     }
-                    for o in mesh.edge_tris(v, w) {
-                        if o == NONE {
-                            continue;
-                        }
-                        if let Some(e) = fan.iter_mut().find(|e| e.0 == o && e.1 == u32::MAX) {
+                    // The triangles of edge (v, w): those at v that contain w.
+                    for e in fan.iter_mut() {
+                        if e.1 == u32::MAX && mesh.tris[e.0 as usize].contains(&w) {
                             e.1 = label;
-                            stack.push(o);
+                            stack.push(e.0);
                         }
                     }
                 }
@@ -359,6 +359,7 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
     let mut used = vec![false; edges.len()];
     let mut loops = Vec::new();
     let mut trace: Vec<u32> = Vec::new();
+    let mut lp: Vec<u32> = Vec::new();
     for (i, &(a0, b0)) in edges.iter().enumerate() {
         if used[pos[i] as usize] {
             continue;
@@ -366,7 +367,8 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
         // Edges of a loop are marked once it closes; an open trace marks nothing.
         trace.clear();
         trace.push(pos[i]);
-        let mut lp = vec![a0];
+        lp.clear();
+        lp.push(a0);
         let (mut u, mut v) = (a0, b0);
         let closed = loop {
             if v == a0 {
@@ -416,7 +418,7 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
             for &k in &trace {
                 used[k as usize] = true;
             }
-            loops.push(lp);
+            loops.push(lp.clone());
         }
     }
     let mut added = 0;
@@ -640,7 +642,11 @@ impl Rounds {
             if !mesh.is_boundary(a, b) || self.known_to_fail(mesh, nbrs, a, b, bowtie) {
                 continue;
             }
+            // A bridge that is undone below leaves the mesh as it was: its stamps are
+            // undone too, so it does not void the failures recorded around it.
+            mesh.savepoint();
             let Some(c) = close_edge(mesh, p, nbrs, o, a, b, bowtie, &mut self.cands) else {
+                mesh.commit();
                 self.failed.insert((a, b), (mesh.clock(), bowtie));
                 continue;
             };
@@ -653,10 +659,12 @@ impl Rounds {
                     for _ in 0..n_new {
                         mesh.pop();
                     }
+                    mesh.rollback_stamps();
                     self.failed.insert((a, b), (mesh.clock(), bowtie));
                     continue;
                 }
             }
+            mesh.commit();
             added += n_new;
             self.buf.clear();
             mesh.boundary_at(c, &mut self.buf);

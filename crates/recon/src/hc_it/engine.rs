@@ -143,6 +143,9 @@ struct State<'a> {
     /// when scanned.
     nc_boundary: Vec<Vec<(u32, u32)>>,
     logged: usize,
+    /// Per triangle slot (3 t + k): the scan (`edge_gen`) that last saw it.
+    edge_mark: Vec<u32>,
+    edge_gen: u32,
 }
 
 /// Runs HC-IT over `order` (the processing order of §3.1). `nbrs(i)` yields the
@@ -172,6 +175,8 @@ pub fn run<'b>(
         flip_cap: 0,
         nc_boundary: vec![Vec::new(); 2 * n],
         logged: 0,
+        edge_mark: Vec::new(),
+        edge_gen: 1,
     };
     s.mesh.log_boundary();
     let mut groups: Vec<(u32, u32)> = Vec::new();
@@ -255,13 +260,33 @@ impl State<'_> {
         }
         self.logged = log_len;
         let mut list = std::mem::take(&mut self.nc_boundary[root as usize]);
-        list.retain(|&(a, b)| self.mesh.is_boundary(a, b));
-        list.sort_unstable();
-        list.dedup();
-        for &(a, b) in &list {
-            debug_assert_eq!(self.nc.find(self.nc_id[a as usize]), root);
-            out.push((a, b, self.mesh.edge_tris(a, b)[0]));
-        }
+        // Keep each current boundary edge once: a -> b is one when its edge has one
+        // triangle that traverses it a -> b; a repeat is known by its triangle's mark.
+        self.edge_mark.resize(3 * self.mesh.tris.len(), 0);
+        list.retain(|&(a, b)| {
+            let [t, t1] = self.mesh.edge_tris(a, b);
+            if t == NONE || t1 != NONE {
+                return false;
+            }
+            let tri = self.mesh.tris[t as usize];
+            let k = (0..3).find(|&k| tri[k] == a).unwrap_or(3);
+            if k == 3 || tri[(k + 1) % 3] != b {
+                return false;
+            }
+            // One triangle has up to three boundary edges: mark per slot.
+            let m = &mut self.edge_mark[3 * t as usize + k];
+            if *m == self.edge_gen {
+                return false;
+            }
+            *m = self.edge_gen;
+            out.push((a, b, t));
+            true
+        });
+        self.edge_gen += 1;
+        debug_assert!(
+            out.iter()
+                .all(|c| self.nc.find(self.nc_id[c.0 as usize]) == root)
+        );
         self.nc_boundary[root as usize] = list;
     }
 

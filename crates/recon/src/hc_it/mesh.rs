@@ -97,6 +97,10 @@ pub struct Mesh {
     /// triangle at each vertex.
     clock: u64,
     stamp: Vec<u64>,
+    /// Stamps overwritten since [`Self::savepoint`] (vertex, old stamp), and the clock then.
+    journal: Vec<(u32, u64)>,
+    journaling: bool,
+    saved_clock: u64,
     /// Directed edges that became boundary edges, in order (only after
     /// [`Self::log_boundary`]).
     log: Vec<(u32, u32)>,
@@ -118,6 +122,9 @@ impl Mesh {
             bin: vec![0; n],
             clock: 0,
             stamp: vec![0; n],
+            journal: Vec::new(),
+            journaling: false,
+            saved_clock: 0,
             log: Vec::new(),
             logging: false,
             mark: Vec::new(),
@@ -165,6 +172,30 @@ impl Mesh {
     #[inline]
     pub fn stamp(&self, v: u32) -> u64 {
         self.stamp[v as usize]
+    }
+
+    /// Starts recording stamp changes, so that a trial that is undone (every triangle
+    /// added since popped again) can also undo its stamps ([`Self::rollback_stamps`]).
+    pub fn savepoint(&mut self) {
+        self.journal.clear();
+        self.journaling = true;
+        self.saved_clock = self.clock;
+    }
+
+    /// Keeps the changes since [`Self::savepoint`].
+    pub fn commit(&mut self) {
+        self.journal.clear();
+        self.journaling = false;
+    }
+
+    /// Restores the stamps and the clock of the [`Self::savepoint`]; the caller has
+    /// undone every change since (the mesh is as it was then).
+    pub fn rollback_stamps(&mut self) {
+        for &(v, old) in self.journal.iter().rev() {
+            self.stamp[v as usize] = old;
+        }
+        self.clock = self.saved_clock;
+        self.commit();
     }
 
     /// Starts a new visit: afterwards [`Self::visit`] returns true once per triangle.
@@ -299,6 +330,9 @@ impl Mesh {
     fn touch(&mut self, t: [u32; 3]) {
         self.clock += 1;
         for v in t {
+            if self.journaling {
+                self.journal.push((v, self.stamp[v as usize]));
+            }
             self.stamp[v as usize] = self.clock;
         }
     }
