@@ -77,8 +77,9 @@ pub struct ZipStats {
 /// that vertex. Returns the rebuilt mesh and the triangles removed.
 fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     let mut drop = vec![false; mesh.tris.len()];
-    let mut fan: Vec<(u32, u32)> = Vec::new();
-    let mut stack: Vec<u32> = Vec::new();
+    // (triangle, fan label, its two vertices other than v)
+    let mut fan: Vec<(u32, u32, [u32; 2])> = Vec::new();
+    let mut stack: Vec<usize> = Vec::new();
     for v in 0..n as u32 {
         let ts = &mesh.vt[v as usize];
         if ts.len() < 2 {
@@ -86,7 +87,10 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
         }
         // Fans: flood over the triangles at v through the edges (v, w).
         fan.clear();
-        fan.extend(ts.iter().map(|&t| (t, u32::MAX)));
+        fan.extend(ts.iter().map(|&t| {
+            let r = rotate_to(mesh.tris[t as usize], v);
+            (t, u32::MAX, [r[1], r[2]])
+        }));
         let mut label = 0u32;
         for s in 0..fan.len() {
             if fan[s].1 != u32::MAX {
@@ -94,18 +98,14 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
             }
             fan[s].1 = label;
             stack.clear();
-            stack.push(fan[s].0);
-            while let Some(t) = stack.pop() {
-                let tri = mesh.tris[t as usize];
-                for &w in &tri {
-                    if w == v {
-                        continue;
-                    }
+            stack.push(s);
+            while let Some(i) = stack.pop() {
+                for w in fan[i].2 {
                     // The triangles of edge (v, w): those at v that contain w.
-                    for e in fan.iter_mut() {
-                        if e.1 == u32::MAX && mesh.tris[e.0 as usize].contains(&w) {
+                    for (j, e) in fan.iter_mut().enumerate() {
+                        if e.1 == u32::MAX && e.2.contains(&w) {
                             e.1 = label;
-                            stack.push(e.0);
+                            stack.push(j);
                         }
                     }
                 }
@@ -119,7 +119,7 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
         let keep = (0..label)
             .max_by(|&a, &b| size(a).cmp(&size(b)).then(b.cmp(&a)))
             .unwrap_or(0);
-        for &(t, l) in &fan {
+        for &(t, l, _) in &fan {
             if l != keep {
                 drop[t as usize] = true;
             }

@@ -141,7 +141,7 @@ struct State<'a> {
     /// filled lazily from the mesh's boundary log (`logged` entries taken so far),
     /// moved along when NCs merge, pruned of edges that stopped being boundary edges
     /// when scanned.
-    nc_boundary: Vec<Vec<(u32, u32)>>,
+    nc_boundary: Vec<Vec<(u32, u32, u32)>>,
     logged: usize,
     /// Per triangle slot (3 t + k): the scan (`edge_gen`) that last saw it.
     edge_mark: Vec<u32>,
@@ -254,32 +254,26 @@ impl State<'_> {
     fn nc_boundary_edges(&mut self, root: u32, out: &mut Vec<BEdge>) {
         let log_len = self.mesh.boundary_log().len();
         for k in self.logged..log_len {
-            let (a, b) = self.mesh.boundary_log()[k];
-            let r = self.root_of(a);
-            self.nc_boundary[r as usize].push((a, b));
+            let e = self.mesh.boundary_log()[k];
+            let r = self.root_of(e.0);
+            self.nc_boundary[r as usize].push(e);
         }
         self.logged = log_len;
         let mut list = std::mem::take(&mut self.nc_boundary[root as usize]);
-        // Keep each current boundary edge once: a -> b is one when its edge has one
-        // triangle that traverses it a -> b; a repeat is known by its triangle's mark.
+        // Keep each current boundary edge once: an entry is current when its slot still
+        // holds the edge as a boundary edge (every slot that became one was logged, so
+        // each current boundary edge has an entry); a repeat is known by its slot's mark.
         self.edge_mark.resize(3 * self.mesh.tris.len(), 0);
-        list.retain(|&(a, b)| {
-            let [t, t1] = self.mesh.edge_tris(a, b);
-            if t == NONE || t1 != NONE {
+        list.retain(|&(a, b, slot)| {
+            if !self.mesh.is_boundary_slot(a, b, slot) {
                 return false;
             }
-            let tri = self.mesh.tris[t as usize];
-            let k = (0..3).find(|&k| tri[k] == a).unwrap_or(3);
-            if k == 3 || tri[(k + 1) % 3] != b {
-                return false;
-            }
-            // One triangle has up to three boundary edges: mark per slot.
-            let m = &mut self.edge_mark[3 * t as usize + k];
+            let m = &mut self.edge_mark[slot as usize];
             if *m == self.edge_gen {
                 return false;
             }
             *m = self.edge_gen;
-            out.push((a, b, t));
+            out.push((a, b, slot / 3));
             true
         });
         self.edge_gen += 1;

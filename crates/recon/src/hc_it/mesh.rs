@@ -101,9 +101,9 @@ pub struct Mesh {
     journal: Vec<(u32, u64)>,
     journaling: bool,
     saved_clock: u64,
-    /// Directed edges that became boundary edges, in order (only after
-    /// [`Self::log_boundary`]).
-    log: Vec<(u32, u32)>,
+    /// Directed edges that became boundary edges with their slot 3 t + k, in order
+    /// (only after [`Self::log_boundary`]).
+    log: Vec<(u32, u32, u32)>,
     logging: bool,
     /// Visit marks of triangles for [`Self::visit`] (generation `mark_gen`).
     mark: Vec<u32>,
@@ -138,10 +138,19 @@ impl Mesh {
         self.logging = true;
     }
 
-    /// Every directed edge that became a boundary edge since logging started, in order
-    /// (an entry may since have stopped being one, or appear again).
-    pub fn boundary_log(&self) -> &[(u32, u32)] {
+    /// Every directed edge a -> b that became a boundary edge since logging started, in
+    /// order, with its slot 3 t + k (edge k of triangle t); an entry may since have
+    /// stopped being one (see [`Self::is_boundary_slot`]), or appear again.
+    pub fn boundary_log(&self) -> &[(u32, u32, u32)] {
         &self.log
+    }
+
+    /// Whether slot 3 t + k is a boundary edge a -> b now (then t is its one triangle).
+    #[inline]
+    pub fn is_boundary_slot(&self, a: u32, b: u32, slot: u32) -> bool {
+        let (t, k) = ((slot / 3) as usize, (slot % 3) as usize);
+        let tri = self.tris[t];
+        self.bmask[t] & (1 << k) != 0 && tri[k] == a && tri[(k + 1) % 3] == b
     }
 
     /// Whether `v` has a boundary edge (equivalently, [`Self::boundary_at`] finds one).
@@ -317,7 +326,7 @@ impl Mesh {
             self.bout[x as usize] += 1;
             self.bin[y as usize] += 1;
             if self.logging {
-                self.log.push((x, y));
+                self.log.push((x, y, 3 * t + k as u32));
             }
         } else if !on && *m & bit != 0 {
             *m &= !bit;
