@@ -3,8 +3,10 @@
 //! to give the same mesh bit for bit.
 //!
 //! `cargo run --release -p reconbench-tools --bin hcit_run -- INPUT [REPEAT]`, INPUT a
-//! cloud file (`hf.ply`) or `sheet:N` / `sphere:N` (the bench's jittered wavy sheet and
-//! golden-spiral sphere). Parameters as JSON in `HCIT_PARAMS`, e.g.
+//! cloud file (`hf.ply`) or `sheet:N` / `sphere:N` / `hf:N` (the bench's jittered wavy
+//! sheet, golden-spiral sphere and noisy height field, the last the points of
+//! `reconbench gen height-field --points N --sampler grid --noise ma-uniform:level=0.3
+//! --seed 1`). Parameters as JSON in `HCIT_PARAMS`, e.g.
 //! `HCIT_PARAMS='{"rho": 2, "closure": "none"}'`. For instruction counts run the built
 //! binary under `valgrind --tool=callgrind`.
 
@@ -15,6 +17,7 @@ use reconbench_geom::PointCloud;
 use reconbench_geom::io::{fnv1a64, read_cloud};
 use reconbench_geom::method::{Diagnostic, Reconstructor, RunCtx};
 use reconbench_recon::{HcIt, HcItParams};
+use reconbench_synth::{DatasetSpec, Density};
 
 /// The bench's jittered m x m grid over [0, 1]^2 lifted by a wavy height.
 fn sheet(n: usize) -> Vec<DVec3> {
@@ -52,6 +55,17 @@ fn main() {
     let cloud = match input.split_once(':') {
         Some(("sheet", n)) => PointCloud::new(sheet(n.parse().expect("N"))).expect("cloud"),
         Some(("sphere", n)) => PointCloud::new(sphere(n.parse().expect("N"))).expect("cloud"),
+        Some(("hf", n)) => {
+            let spec = DatasetSpec {
+                shape: "height-field".parse().expect("shape"),
+                sampler: "grid".parse().expect("sampler"),
+                density: Density::Count(n.parse().expect("N")),
+                perturbations: vec!["ma-uniform:level=0.3".parse().expect("noise")],
+                scan: None,
+            };
+            let g = reconbench_synth::generate(&spec, 1).expect("height field");
+            PointCloud::new(g.positions).expect("cloud")
+        }
         _ => read_cloud(input).expect("cloud file"),
     };
     let params: HcItParams = match std::env::var("HCIT_PARAMS") {

@@ -129,10 +129,12 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     if cut == 0 {
         return (mesh, 0);
     }
-    let mut out = Mesh::new(n);
+    // A subset of an edge-manifold, consistently oriented mesh is one: every triangle
+    // can be added again.
+    let mut out = Mesh::with_capacity(n, mesh.tris.len() - cut);
     for (t, d) in mesh.tris.iter().zip(&drop) {
         if !d {
-            out.add(*t);
+            out.add_known(*t);
         }
     }
     (out, cut)
@@ -357,6 +359,8 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
     }
     // Slots of the edges of the loops found so far.
     let mut used = vec![false; edges.len()];
+    // The trace (by its start edge, plus one) that holds each slot.
+    let mut in_trace = vec![0u32; edges.len()];
     let mut loops = Vec::new();
     let mut trace: Vec<u32> = Vec::new();
     let mut lp: Vec<u32> = Vec::new();
@@ -367,6 +371,8 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
         // Edges of a loop are marked once it closes; an open trace marks nothing.
         trace.clear();
         trace.push(pos[i]);
+        let trace_id = i as u32 + 1;
+        in_trace[pos[i] as usize] = trace_id;
         lp.clear();
         lp.push(a0);
         let (mut u, mut v) = (a0, b0);
@@ -381,7 +387,7 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
             // At a vertex with several outgoing boundary edges (a bow-tie), the one that
             // turns least counter-clockwise from the way back bounds the same gap.
             let slots = start[v as usize]..start[v as usize + 1];
-            let free = |k: &u32| !used[*k as usize] && !trace.contains(k);
+            let free = |k: &u32| !used[*k as usize] && in_trace[*k as usize] != trace_id;
             let next = if slots.clone().filter(free).count() <= 1 {
                 slots.clone().find(free)
             } else {
@@ -412,6 +418,7 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
                 break false;
             };
             trace.push(k);
+            in_trace[k as usize] = trace_id;
             (u, v) = (v, head[k as usize]);
         };
         if closed && lp.len() >= 3 {
@@ -695,7 +702,7 @@ fn unfold<'b>(
     theta: f64,
     rho: f64,
 ) -> (Mesh, usize) {
-    let mut full = Mesh::new(p.len());
+    let mut full = Mesh::with_capacity(p.len(), tris.len());
     for &t in &tris {
         // The sweep's triangles passed the same checks in the same order.
         let added = full.add(t);
@@ -731,7 +738,7 @@ fn unfold<'b>(
             keep[id] = false;
         }
     }
-    let mut mesh = Mesh::new(p.len());
+    let mut mesh = Mesh::with_capacity(p.len(), tris.len() + tris.len() / 2);
     let mut dropped = 0;
     let bridge2 = (BRIDGE * rho).powi(2);
     for (t, k) in tris.into_iter().zip(keep) {

@@ -164,7 +164,7 @@ pub fn run<'b>(
     let mut s = State {
         p,
         o,
-        mesh: Mesh::new(n),
+        mesh: Mesh::with_capacity(n, 2 * n),
         nc: UnionFind::new(2 * n),
         sm: UnionFind::new(2 * n),
         nc_id: (0..n as u32).collect(),

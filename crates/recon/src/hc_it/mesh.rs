@@ -132,6 +132,16 @@ impl Mesh {
         }
     }
 
+    /// An empty mesh over `n` vertices with room for `tris` triangles (and their edges)
+    /// before it reallocates.
+    pub fn with_capacity(n: usize, tris: usize) -> Self {
+        let mut m = Self::new(n);
+        m.tris.reserve(tris);
+        m.bmask.reserve(tris);
+        m.edges.reserve(tris * 3 / 2 + 16);
+        m
+    }
+
     /// Starts logging the directed edges that become boundary edges (see
     /// [`Self::boundary_log`]).
     pub fn log_boundary(&mut self) {
@@ -297,6 +307,17 @@ impl Mesh {
         self.bmask.push(0);
         self.link(id, t);
         Some(id)
+    }
+
+    /// Adds `t`, which the caller knows [`Self::can_add`] accepts (a triangle of a valid
+    /// mesh whose triangles are re-added in order, some left out); returns its id.
+    pub fn add_known(&mut self, t: [u32; 3]) -> u32 {
+        debug_assert!(self.can_add(t), "triangle {t:?} cannot be added");
+        let id = self.tris.len() as u32;
+        self.tris.push(t);
+        self.bmask.push(0);
+        self.link(id, t);
+        id
     }
 
     /// Removes the triangle added last (undoes [`Self::add`]).
