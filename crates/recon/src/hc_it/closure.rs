@@ -26,6 +26,7 @@
 use std::collections::VecDeque;
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::mesh::{Mesh, NONE, angle, circumradius, cross, min_angle, rotate_to};
 
@@ -39,6 +40,34 @@ const UNFOLD_PASSES: usize = 4;
 
 /// Rounds over the remaining boundary edges at most.
 pub const MAX_ROUNDS: usize = 8;
+
+/// Marks of the triangles one overlap test has seen (each is tested once).
+#[derive(Debug, Default)]
+struct Visit {
+    mark: Vec<u32>,
+    generation: u32,
+}
+
+impl Visit {
+    /// Starts a visit of a mesh with `tris` triangles.
+    fn start(&mut self, tris: usize) {
+        self.mark.resize(tris, 0);
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.mark.fill(0);
+            self.generation = 1;
+        }
+    }
+
+    /// Whether triangle `t` is seen for the first time in this visit.
+    #[inline]
+    fn first(&mut self, t: u32) -> bool {
+        let m = &mut self.mark[t as usize];
+        let fresh = *m != self.generation;
+        *m = self.generation;
+        fresh
+    }
+}
 
 /// Options of the pass (lengths in input units).
 #[derive(Debug, Clone)]
@@ -156,8 +185,9 @@ fn join_fans<'b>(
     o: &ZipOpts,
 ) -> usize {
     let mut buf = Vec::new();
+    let mut seen = Visit::default();
     (0..p.len() as u32)
-        .map(|v| join_at(mesh, p, nbrs, o, v, &mut buf))
+        .map(|v| join_at(mesh, &mut seen, p, nbrs, o, v, &mut buf))
         .sum()
 }
 
@@ -168,8 +198,10 @@ fn gaps_at(mesh: &Mesh, v: u32) -> usize {
 }
 
 /// [`join_fans`] at one vertex; returns the triangles added.
+#[allow(clippy::too_many_arguments)]
 fn join_at<'b>(
     mesh: &mut Mesh,
+    seen: &mut Visit,
     p: &[DVec3],
     nbrs: &impl Fn(u32) -> &'b [u32],
     o: &ZipOpts,
@@ -217,7 +249,7 @@ fn join_at<'b>(
             continue;
         };
         if p[a as usize].distance(p[b as usize]) < JOIN_MAX_EDGE * o.rho
-            && try_triangle(mesh, p, nbrs, &loose, [v, a, b], n)
+            && try_triangle(mesh, seen, p, nbrs, &loose, [v, a, b], n)
         {
             added += 1;
         }
@@ -505,7 +537,7 @@ fn clip_ears(mesh: &mut Mesh, p: &[DVec3], theta: f64, mut lp: Vec<u32>) -> usiz
 pub fn zip<'b>(
     p: &[DVec3],
     tris: Vec<[u32; 3]>,
-    nbrs: impl Fn(u32) -> &'b [u32],
+    nbrs: impl Fn(u32) -> &'b [u32] + Sync,
     o: &ZipOpts,
     checkpoint: &mut dyn FnMut() -> Result<(), reconbench_geom::method::MethodError>,
 ) -> Result<(Vec<[u32; 3]>, ZipStats), reconbench_geom::method::MethodError> {
@@ -525,6 +557,7 @@ pub fn zip<'b>(
         buf: Vec::new(),
         cands: Vec::new(),
         tried: 0,
+        seen: Visit::default(),
         failed: foldhash::HashMap::default(),
     };
     // Phase 1 never gives a vertex a second fan; phase 2 may (to bridge two pieces that
@@ -597,6 +630,8 @@ struct Rounds {
     buf: Vec<(u32, u32, u32)>,
     cands: Vec<(f64, u32)>,
     tried: usize,
+    /// Scratch of the overlap test.
+    seen: Visit,
     /// Boundary edges whose closing failed: the mesh clock after the attempt, and the
     /// phase (`bowtie`) it ran in.
     failed: foldhash::HashMap<(u32, u32), (u64, bool)>,
@@ -652,7 +687,17 @@ impl Rounds {
             // A bridge that is undone below leaves the mesh as it was: its stamps are
             // undone too, so it does not void the failures recorded around it.
             mesh.savepoint();
-            let Some(c) = close_edge(mesh, p, nbrs, o, a, b, bowtie, &mut self.cands) else {
+            let Some(c) = close_edge(
+                mesh,
+                &mut self.seen,
+                p,
+                nbrs,
+                o,
+                a,
+                b,
+                bowtie,
+                &mut self.cands,
+            ) else {
                 mesh.commit();
                 self.failed.insert((a, b), (mesh.clock(), bowtie));
                 continue;
@@ -661,7 +706,7 @@ impl Rounds {
             if bowtie && gaps_at(mesh, c) > 1 {
                 // A bridge to another fan of c is kept only if the gap it leaves between
                 // the fans closes at once, so no vertex is left with two fans.
-                n_new += join_at(mesh, p, nbrs, o, c, &mut self.buf);
+                n_new += join_at(mesh, &mut self.seen, p, nbrs, o, c, &mut self.buf);
                 if gaps_at(mesh, c) > 1 {
                     for _ in 0..n_new {
                         mesh.pop();
@@ -698,7 +743,7 @@ impl Rounds {
 fn unfold<'b>(
     p: &[DVec3],
     tris: Vec<[u32; 3]>,
-    nbrs: &impl Fn(u32) -> &'b [u32],
+    nbrs: &(impl Fn(u32) -> &'b [u32] + Sync),
     theta: f64,
     rho: f64,
 ) -> (Mesh, usize) {
@@ -738,13 +783,45 @@ fn unfold<'b>(
             keep[id] = false;
         }
     }
-    let mut mesh = Mesh::with_capacity(p.len(), tris.len() + tris.len() / 2);
-    let mut dropped = 0;
     let bridge2 = (BRIDGE * rho).powi(2);
-    for (t, k) in tris.into_iter().zip(keep) {
-        let long =
-            (0..3).any(|k| p[t[k] as usize].distance_squared(p[t[(k + 1) % 3] as usize]) > bridge2);
-        if k && !long && !overlaps(&mut mesh, p, t, nbrs(t[0])) && mesh.add(t).is_some() {
+    let cand: Vec<bool> = tris
+        .iter()
+        .zip(&keep)
+        .map(|(t, &k)| {
+            k && !(0..3)
+                .any(|k| p[t[k] as usize].distance_squared(p[t[(k + 1) % 3] as usize]) > bridge2)
+        })
+        .collect();
+    // The triangles kept before a candidate are some of the candidates before it, so
+    // when it overlaps none of those (tested in parallel on the full mesh, whose ids are
+    // the sweep's order) it overlaps none of the kept ones: the test below is needed
+    // only where this one finds an overlap.
+    let maybe: Vec<bool> = {
+        let full = &full;
+        let cand = &cand;
+        let tris = &tris;
+        (0..tris.len())
+            .into_par_iter()
+            .chunks(4096)
+            .flat_map_iter(|ids| {
+                let mut seen = Visit::default();
+                ids.into_iter().map(move |i| {
+                    cand[i]
+                        && overlaps_among(full, &mut seen, p, tris[i], nbrs(tris[i][0]), |j| {
+                            (j as usize) < i && cand[j as usize]
+                        })
+                })
+            })
+            .collect()
+    };
+    let mut mesh = Mesh::with_capacity(p.len(), tris.len() + tris.len() / 2);
+    let mut seen = Visit::default();
+    let mut dropped = 0;
+    for (i, t) in tris.into_iter().enumerate() {
+        if cand[i]
+            && !(maybe[i] && overlaps(&mesh, &mut seen, p, t, nbrs(t[0])))
+            && mesh.add(t).is_some()
+        {
             continue;
         }
         dropped += 1;
@@ -766,7 +843,19 @@ fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
 /// Each triangle is tested once (it is reached from up to three of the points), and
 /// the 18 orientations a pair needs are computed once: the crossing tests and the
 /// inside tests use the same signs (the same expressions as `mesh::crosses`).
-fn overlaps(mesh: &mut Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
+fn overlaps(mesh: &Mesh, seen: &mut Visit, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
+    overlaps_among(mesh, seen, p, t, near, |_| true)
+}
+
+/// [`overlaps`] with only the triangles of `mesh` that `include` accepts.
+fn overlaps_among(
+    mesh: &Mesh,
+    seen: &mut Visit,
+    p: &[DVec3],
+    t: [u32; 3],
+    near: &[u32],
+    include: impl Fn(u32) -> bool,
+) -> bool {
     let n_t = cross(p, t);
     if n_t.length_squared() == 0.0 {
         return true;
@@ -782,11 +871,10 @@ fn overlaps(mesh: &mut Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
     // Only triangles whose box meets t's box grown by `reach` can overlap it.
     let (lo, hi) = bbox(p, t);
     let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
-    mesh.new_visit();
+    seen.start(mesh.tris.len());
     for &x in t.iter().chain(near) {
-        for i in 0..mesh.vt[x as usize].len() {
-            let f = mesh.vt[x as usize][i];
-            if !mesh.visit(f) {
+        for &f in &mesh.vt[x as usize] {
+            if !include(f) || !seen.first(f) {
                 continue;
             }
             let o = mesh.tris[f as usize];
@@ -858,6 +946,7 @@ const TRIES: usize = 6;
 #[allow(clippy::too_many_arguments)]
 fn close_edge<'b>(
     mesh: &mut Mesh,
+    seen: &mut Visit,
     p: &[DVec3],
     nbrs: &impl Fn(u32) -> &'b [u32],
     o: &ZipOpts,
@@ -894,13 +983,15 @@ fn close_edge<'b>(
         .iter()
         .take(TRIES)
         .map(|&(_, c)| c)
-        .find(|&c| try_triangle(mesh, p, nbrs, o, [b, a, c], n_w))
+        .find(|&c| try_triangle(mesh, seen, p, nbrs, o, [b, a, c], n_w))
 }
 
 /// The checks of the module docs on t = (b, a, c) against W's normal `n_w`; adds t when
 /// they pass.
+#[allow(clippy::too_many_arguments)]
 fn try_triangle<'b>(
     mesh: &mut Mesh,
+    seen: &mut Visit,
     p: &[DVec3],
     nbrs: &impl Fn(u32) -> &'b [u32],
     o: &ZipOpts,
@@ -943,7 +1034,7 @@ fn try_triangle<'b>(
     {
         return false;
     }
-    if overlaps(mesh, p, t, nbrs(a)) {
+    if overlaps(mesh, seen, p, t, nbrs(a)) {
         return false;
     }
     mesh.add(t).is_some()

@@ -105,9 +105,6 @@ pub struct Mesh {
     /// (only after [`Self::log_boundary`]).
     log: Vec<(u32, u32, u32)>,
     logging: bool,
-    /// Visit marks of triangles for [`Self::visit`] (generation `mark_gen`).
-    mark: Vec<u32>,
-    mark_gen: u32,
 }
 
 impl Mesh {
@@ -127,8 +124,6 @@ impl Mesh {
             saved_clock: 0,
             log: Vec::new(),
             logging: false,
-            mark: Vec::new(),
-            mark_gen: 0,
         }
     }
 
@@ -215,28 +210,6 @@ impl Mesh {
         }
         self.clock = self.saved_clock;
         self.commit();
-    }
-
-    /// Starts a new visit: afterwards [`Self::visit`] returns true once per triangle.
-    pub fn new_visit(&mut self) {
-        self.mark.resize(self.tris.len(), 0);
-        self.mark_gen = self.mark_gen.wrapping_add(1);
-        if self.mark_gen == 0 {
-            self.mark.fill(0);
-            self.mark_gen = 1;
-        }
-    }
-
-    /// Whether triangle `t` is seen for the first time since [`Self::new_visit`].
-    #[inline]
-    pub fn visit(&mut self, t: u32) -> bool {
-        let m = &mut self.mark[t as usize];
-        if *m == self.mark_gen {
-            false
-        } else {
-            *m = self.mark_gen;
-            true
-        }
     }
 
     /// The (up to two) triangles of edge {a, b}.
