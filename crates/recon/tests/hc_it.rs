@@ -640,3 +640,99 @@ fn jittered_bolt_plate_grid_has_exactly_its_three_loops() {
     assert_eq!(t.non_manifold_vertices, 0);
     assert!(num(&r, "unmeshed") < 0.01 * pts.len() as f64);
 }
+
+/// FNV-1a hash of the faces in order (their vertex indices as little-endian u32).
+fn face_hash(r: &Reconstruction) -> u64 {
+    let bytes: Vec<u8> = r
+        .mesh
+        .faces()
+        .iter()
+        .flat_map(|f| f.iter().flat_map(|v| v.to_le_bytes()))
+        .collect();
+    reconbench_geom::io::fnv1a64(&bytes)
+}
+
+/// The issue-24 speed work (incremental boundary bookkeeping, the zipping rounds'
+/// failure cache, the per-NC boundary lists of the winner fallback) must not change a
+/// single face: these hashes were computed with the code before it (commit 4b30d1a,
+/// `tools/src/bin/hcit_run.rs`). The noisy height field exercises every step of the
+/// closure pass (232 cut, 113 joined, 60 slit and 320 filled triangles), `winner_scan =
+/// "all"` the whole-NC boundary scan at every point.
+#[test]
+fn faces_are_bit_identical_to_the_code_before_the_speed_work() {
+    let literal_all = HcItParams {
+        closure: Closure::None,
+        winner_scan: WinnerScan::All,
+        ..Default::default()
+    };
+    let literal = HcItParams {
+        closure: Closure::None,
+        ..Default::default()
+    };
+    let spec = reconbench_synth::DatasetSpec {
+        shape: "height-field".parse().unwrap(),
+        sampler: "grid".parse().unwrap(),
+        density: reconbench_synth::Density::Count(10_000),
+        perturbations: vec!["ma-uniform:level=0.3".parse().unwrap()],
+        scan: None,
+    };
+    let hf = reconbench_synth::generate(&spec, 1).unwrap().positions;
+    let sheet = sheet(50, wavy);
+    let sphere = sphere(3000);
+    let cases: [(&str, &[DVec3], HcItParams, usize, u64); 7] = [
+        (
+            "sheet",
+            &sheet,
+            HcItParams::default(),
+            4623,
+            0xbd8ae77f95224aaf,
+        ),
+        (
+            "sheet all",
+            &sheet,
+            literal_all.clone(),
+            4450,
+            0xf8e2fa89913c7467,
+        ),
+        (
+            "sphere",
+            &sphere,
+            HcItParams::default(),
+            5996,
+            0x41942be9912c658f,
+        ),
+        (
+            "sphere all",
+            &sphere,
+            literal_all.clone(),
+            5995,
+            0x6db411b234213171,
+        ),
+        (
+            "height field",
+            &hf,
+            HcItParams::default(),
+            13288,
+            0x1891c39804ec2e47,
+        ),
+        (
+            "height field all",
+            &hf,
+            literal_all,
+            10150,
+            0x8f3aa6927eaa9c5c,
+        ),
+        (
+            "height field literal",
+            &hf,
+            literal,
+            10122,
+            0x9972484c2661c1e1,
+        ),
+    ];
+    for (name, pts, params, faces, hash) in cases {
+        let r = run(pts, params);
+        assert_eq!(r.mesh.faces().len(), faces, "{name}: face count");
+        assert_eq!(face_hash(&r), hash, "{name}: faces differ");
+    }
+}

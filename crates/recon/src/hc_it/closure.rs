@@ -26,8 +26,9 @@
 use std::collections::VecDeque;
 
 use glam::DVec3;
+use rayon::prelude::*;
 
-use super::mesh::{Mesh, NONE, angle, circumradius, cross, crosses, min_angle, rotate_to};
+use super::mesh::{Mesh, NONE, angle, circumradius, cross, min_angle, rotate_to};
 
 /// Sweep triangles with an edge longer than this many rho are left out: they are the
 /// bridges of the winner fallback (the nearest boundary edge of the whole NC when none
@@ -39,6 +40,34 @@ const UNFOLD_PASSES: usize = 4;
 
 /// Rounds over the remaining boundary edges at most.
 pub const MAX_ROUNDS: usize = 8;
+
+/// Marks of the triangles one overlap test has seen (each is tested once).
+#[derive(Debug, Default)]
+struct Visit {
+    mark: Vec<u32>,
+    generation: u32,
+}
+
+impl Visit {
+    /// Starts a visit of a mesh with `tris` triangles.
+    fn start(&mut self, tris: usize) {
+        self.mark.resize(tris, 0);
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.mark.fill(0);
+            self.generation = 1;
+        }
+    }
+
+    /// Whether triangle `t` is seen for the first time in this visit.
+    #[inline]
+    fn first(&mut self, t: u32) -> bool {
+        let m = &mut self.mark[t as usize];
+        let fresh = *m != self.generation;
+        *m = self.generation;
+        fresh
+    }
+}
 
 /// Options of the pass (lengths in input units).
 #[derive(Debug, Clone)]
@@ -77,7 +106,9 @@ pub struct ZipStats {
 /// that vertex. Returns the rebuilt mesh and the triangles removed.
 fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     let mut drop = vec![false; mesh.tris.len()];
-    let mut fan: Vec<(u32, u32)> = Vec::new();
+    // (triangle, fan label, its two vertices other than v)
+    let mut fan: Vec<(u32, u32, [u32; 2])> = Vec::new();
+    let mut stack: Vec<usize> = Vec::new();
     for v in 0..n as u32 {
         let ts = &mesh.vt[v as usize];
         if ts.len() < 2 {
@@ -85,27 +116,25 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
         }
         // Fans: flood over the triangles at v through the edges (v, w).
         fan.clear();
-        fan.extend(ts.iter().map(|&t| (t, u32::MAX)));
+        fan.extend(ts.iter().map(|&t| {
+            let r = rotate_to(mesh.tris[t as usize], v);
+            (t, u32::MAX, [r[1], r[2]])
+        }));
         let mut label = 0u32;
         for s in 0..fan.len() {
             if fan[s].1 != u32::MAX {
                 continue;
             }
             fan[s].1 = label;
-            let mut stack = vec![fan[s].0];
-            while let Some(t) = stack.pop() {
-                let tri = mesh.tris[t as usize];
-                for &w in &tri {
-                    if w == v {
-                        continue;
-                    }
-                    for o in mesh.edge_tris(v, w) {
-                        if o == NONE {
-                            continue;
-                        }
-                        if let Some(e) = fan.iter_mut().find(|e| e.0 == o && e.1 == u32::MAX) {
+            stack.clear();
+            stack.push(s);
+            while let Some(i) = stack.pop() {
+                for w in fan[i].2 {
+                    // The triangles of edge (v, w): those at v that contain w.
+                    for (j, e) in fan.iter_mut().enumerate() {
+                        if e.1 == u32::MAX && e.2.contains(&w) {
                             e.1 = label;
-                            stack.push(o);
+                            stack.push(j);
                         }
                     }
                 }
@@ -119,7 +148,7 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
         let keep = (0..label)
             .max_by(|&a, &b| size(a).cmp(&size(b)).then(b.cmp(&a)))
             .unwrap_or(0);
-        for &(t, l) in &fan {
+        for &(t, l, _) in &fan {
             if l != keep {
                 drop[t as usize] = true;
             }
@@ -129,10 +158,12 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     if cut == 0 {
         return (mesh, 0);
     }
-    let mut out = Mesh::new(n);
+    // A subset of an edge-manifold, consistently oriented mesh is one: every triangle
+    // can be added again.
+    let mut out = Mesh::with_capacity(n, mesh.tris.len() - cut);
     for (t, d) in mesh.tris.iter().zip(&drop) {
         if !d {
-            out.add(*t);
+            out.add_known(*t);
         }
     }
     (out, cut)
@@ -154,31 +185,34 @@ fn join_fans<'b>(
     o: &ZipOpts,
 ) -> usize {
     let mut buf = Vec::new();
+    let mut seen = Visit::default();
     (0..p.len() as u32)
-        .map(|v| join_at(mesh, p, nbrs, o, v, &mut buf))
+        .map(|v| join_at(mesh, &mut seen, p, nbrs, o, v, &mut buf))
         .sum()
 }
 
 /// Outgoing boundary edges at `v`: more than one means several fans (a non-manifold
 /// vertex).
-fn gaps_at(mesh: &Mesh, v: u32, buf: &mut Vec<(u32, u32, u32)>) -> usize {
-    buf.clear();
-    mesh.boundary_at(v, buf);
-    buf.iter().filter(|e| e.0 == v).count()
+fn gaps_at(mesh: &Mesh, v: u32) -> usize {
+    mesh.boundary_out(v) as usize
 }
 
 /// [`join_fans`] at one vertex; returns the triangles added.
+#[allow(clippy::too_many_arguments)]
 fn join_at<'b>(
     mesh: &mut Mesh,
+    seen: &mut Visit,
     p: &[DVec3],
     nbrs: &impl Fn(u32) -> &'b [u32],
     o: &ZipOpts,
     v: u32,
     buf: &mut Vec<(u32, u32, u32)>,
 ) -> usize {
-    if gaps_at(mesh, v, buf) <= 1 {
+    if gaps_at(mesh, v) <= 1 {
         return 0;
     }
+    buf.clear();
+    mesh.boundary_at(v, buf);
     let loose = ZipOpts {
         max_radius: f64::INFINITY,
         ..o.clone()
@@ -215,7 +249,7 @@ fn join_at<'b>(
             continue;
         };
         if p[a as usize].distance(p[b as usize]) < JOIN_MAX_EDGE * o.rho
-            && try_triangle(mesh, p, nbrs, &loose, [v, a, b], n)
+            && try_triangle(mesh, seen, p, nbrs, &loose, [v, a, b], n)
         {
             added += 1;
         }
@@ -240,31 +274,21 @@ const SLIT_ANGLE: f64 = 0.5;
 fn split_slits(mesh: &mut Mesh, p: &[DVec3], theta: f64) -> usize {
     let mut queue: VecDeque<(u32, u32)> = boundary_edges(mesh).collect();
     let mut buf = Vec::new();
+    let mut cands: Vec<(u32, u32)> = Vec::new();
     let mut split = 0;
     while let Some((u, v)) = queue.pop_front() {
         if !mesh.is_boundary(u, v) {
             continue;
         }
-        // Boundary neighbours: y after v (v -> y) and x before u (x -> u).
+        // Boundary neighbours: y after v (v -> y), then x before u (x -> u).
+        cands.clear();
         buf.clear();
         mesh.boundary_at(v, &mut buf);
-        let after: Vec<u32> = buf
-            .iter()
-            .filter(|&&(a, _, _)| a == v)
-            .map(|&(_, b, _)| b)
-            .collect();
+        cands.extend(buf.iter().filter(|e| e.0 == v).map(|e| (e.1, v)));
         buf.clear();
         mesh.boundary_at(u, &mut buf);
-        let before: Vec<u32> = buf
-            .iter()
-            .filter(|&&(_, b, _)| b == u)
-            .map(|&(a, _, _)| a)
-            .collect();
-        let cands = after
-            .into_iter()
-            .map(|y| (y, v))
-            .chain(before.into_iter().map(|x| (x, u)));
-        for (y, at) in cands {
+        cands.extend(buf.iter().filter(|e| e.1 == u).map(|e| (e.0, u)));
+        for &(y, at) in &cands {
             if let Some((e1, e2)) = try_split(mesh, p, theta, u, v, y, at) {
                 split += 1;
                 queue.push_back(e1);
@@ -346,19 +370,43 @@ const FILL_MAX_EDGES: usize = 16;
 /// added.
 fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -> usize {
     let edges: Vec<(u32, u32)> = boundary_edges(mesh).collect();
-    let mut out: foldhash::HashMap<u32, Vec<u32>> = foldhash::HashMap::default();
-    for &(a, b) in &edges {
-        out.entry(a).or_default().push(b);
+    // The outgoing boundary edges of each vertex in edge order, as flat arrays: `start`
+    // indexes `head` by vertex, `pos[i]` is edge i's slot.
+    let n = p.len();
+    let mut start = vec![0u32; n + 1];
+    for &(a, _) in &edges {
+        start[a as usize + 1] += 1;
     }
-    let mut used: foldhash::HashSet<(u32, u32)> = foldhash::HashSet::default();
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut head = vec![0u32; edges.len()];
+    let mut pos = vec![0u32; edges.len()];
+    for (i, &(a, b)) in edges.iter().enumerate() {
+        let f = &mut fill[a as usize];
+        head[*f as usize] = b;
+        pos[i] = *f;
+        *f += 1;
+    }
+    // Slots of the edges of the loops found so far.
+    let mut used = vec![false; edges.len()];
+    // The trace (by its start edge, plus one) that holds each slot.
+    let mut in_trace = vec![0u32; edges.len()];
     let mut loops = Vec::new();
-    for &(a0, b0) in &edges {
-        if used.contains(&(a0, b0)) {
+    let mut trace: Vec<u32> = Vec::new();
+    let mut lp: Vec<u32> = Vec::new();
+    for (i, &(a0, b0)) in edges.iter().enumerate() {
+        if used[pos[i] as usize] {
             continue;
         }
         // Edges of a loop are marked once it closes; an open trace marks nothing.
-        let mut trace = vec![(a0, b0)];
-        let mut lp = vec![a0];
+        trace.clear();
+        trace.push(pos[i]);
+        let trace_id = i as u32 + 1;
+        in_trace[pos[i] as usize] = trace_id;
+        lp.clear();
+        lp.push(a0);
         let (mut u, mut v) = (a0, b0);
         let closed = loop {
             if v == a0 {
@@ -370,39 +418,46 @@ fn fill_small_loops(mesh: &mut Mesh, p: &[DVec3], max_radius: f64, theta: f64) -
             lp.push(v);
             // At a vertex with several outgoing boundary edges (a bow-tie), the one that
             // turns least counter-clockwise from the way back bounds the same gap.
-            let n = cross(p, mesh.tris[mesh.edge_tris(u, v)[0] as usize]);
-            let back = p[u as usize] - p[v as usize];
-            let next = out.get(&v).and_then(|ws| {
-                let free: Vec<u32> = ws
-                    .iter()
-                    .copied()
-                    .filter(|&w| !used.contains(&(v, w)) && !trace.contains(&(v, w)))
-                    .collect();
-                if free.len() == 1 {
-                    return Some(free[0]);
+            let slots = start[v as usize]..start[v as usize + 1];
+            let free = |k: &u32| !used[*k as usize] && in_trace[*k as usize] != trace_id;
+            let next = if slots.clone().filter(free).count() <= 1 {
+                slots.clone().find(free)
+            } else {
+                let n = cross(p, mesh.tris[mesh.edge_tris(u, v)[0] as usize]);
+                let back = p[u as usize] - p[v as usize];
+                let ccw = |w: u32| {
+                    let d = p[w as usize] - p[v as usize];
+                    let a = back.cross(d).dot(n).atan2(back.dot(d));
+                    if a <= 0.0 {
+                        a + std::f64::consts::TAU
+                    } else {
+                        a
+                    }
+                };
+                let mut best: Option<u32> = None;
+                for k in slots.clone().filter(free) {
+                    let w = head[k as usize];
+                    if best.is_none_or(|b| {
+                        let bw = head[b as usize];
+                        ccw(w).total_cmp(&ccw(bw)).then(w.cmp(&bw)).is_lt()
+                    }) {
+                        best = Some(k);
+                    }
                 }
-                free.into_iter().min_by(|&x, &y| {
-                    let ccw = |w: u32| {
-                        let d = p[w as usize] - p[v as usize];
-                        let a = back.cross(d).dot(n).atan2(back.dot(d));
-                        if a <= 0.0 {
-                            a + std::f64::consts::TAU
-                        } else {
-                            a
-                        }
-                    };
-                    ccw(x).total_cmp(&ccw(y)).then(x.cmp(&y))
-                })
-            });
-            let Some(w) = next else {
+                best
+            };
+            let Some(k) = next else {
                 break false;
             };
-            trace.push((v, w));
-            (u, v) = (v, w);
+            trace.push(k);
+            in_trace[k as usize] = trace_id;
+            (u, v) = (v, head[k as usize]);
         };
         if closed && lp.len() >= 3 {
-            used.extend(trace);
-            loops.push(lp);
+            for &k in &trace {
+                used[k as usize] = true;
+            }
+            loops.push(lp.clone());
         }
     }
     let mut added = 0;
@@ -482,7 +537,7 @@ fn clip_ears(mesh: &mut Mesh, p: &[DVec3], theta: f64, mut lp: Vec<u32>) -> usiz
 pub fn zip<'b>(
     p: &[DVec3],
     tris: Vec<[u32; 3]>,
-    nbrs: impl Fn(u32) -> &'b [u32],
+    nbrs: impl Fn(u32) -> &'b [u32] + Sync,
     o: &ZipOpts,
     checkpoint: &mut dyn FnMut() -> Result<(), reconbench_geom::method::MethodError>,
 ) -> Result<(Vec<[u32; 3]>, ZipStats), reconbench_geom::method::MethodError> {
@@ -502,6 +557,8 @@ pub fn zip<'b>(
         buf: Vec::new(),
         cands: Vec::new(),
         tried: 0,
+        seen: Visit::default(),
+        failed: foldhash::HashMap::default(),
     };
     // Phase 1 never gives a vertex a second fan; phase 2 may (to bridge two pieces that
     // meet along a crack without a common vertex), and its later rounds fill the gaps;
@@ -535,6 +592,8 @@ pub fn zip<'b>(
     let (m, cut) = cut_fans(mesh, p.len());
     mesh = m;
     stats.cut = cut;
+    // A rebuilt mesh has a new clock: the recorded failures no longer apply.
+    ctx.failed.clear();
     if cut > 0 {
         for bowtie in [false, true] {
             for _ in 0..MAX_ROUNDS {
@@ -571,6 +630,36 @@ struct Rounds {
     buf: Vec<(u32, u32, u32)>,
     cands: Vec<(f64, u32)>,
     tried: usize,
+    /// Scratch of the overlap test.
+    seen: Visit,
+    /// Boundary edges whose closing failed: the mesh clock after the attempt, and the
+    /// phase (`bowtie`) it ran in.
+    failed: foldhash::HashMap<(u32, u32), (u64, bool)>,
+}
+
+impl Rounds {
+    /// Whether closing a -> b in phase `bowtie` is known to fail: it failed in the same
+    /// phase and no triangle at a, b or a's rho-neighbours changed since. Everything
+    /// [`close_edge`] reads is a triangle at one of those points (c is one of the
+    /// neighbours; the overlap and inside tests look at the neighbours' triangles), so it
+    /// would fail again: skipping it gives the same mesh.
+    fn known_to_fail<'b>(
+        &self,
+        mesh: &Mesh,
+        nbrs: &impl Fn(u32) -> &'b [u32],
+        a: u32,
+        b: u32,
+        bowtie: bool,
+    ) -> bool {
+        match self.failed.get(&(a, b)) {
+            Some(&(at, phase)) if phase == bowtie => {
+                mesh.stamp(a) <= at
+                    && mesh.stamp(b) <= at
+                    && nbrs(a).iter().all(|&v| mesh.stamp(v) <= at)
+            }
+            _ => false,
+        }
+    }
 }
 
 impl Rounds {
@@ -592,34 +681,42 @@ impl Rounds {
             if self.tried.is_multiple_of(4096) {
                 checkpoint()?;
             }
-            if !mesh.is_boundary(a, b) {
+            if !mesh.is_boundary(a, b) || self.known_to_fail(mesh, nbrs, a, b, bowtie) {
                 continue;
             }
+            // A bridge that is undone below leaves the mesh as it was: its stamps are
+            // undone too, so it does not void the failures recorded around it.
+            mesh.savepoint();
             let Some(c) = close_edge(
                 mesh,
+                &mut self.seen,
                 p,
                 nbrs,
                 o,
                 a,
                 b,
                 bowtie,
-                &mut self.buf,
                 &mut self.cands,
             ) else {
+                mesh.commit();
+                self.failed.insert((a, b), (mesh.clock(), bowtie));
                 continue;
             };
             let mut n_new = 1;
-            if bowtie && gaps_at(mesh, c, &mut self.buf) > 1 {
+            if bowtie && gaps_at(mesh, c) > 1 {
                 // A bridge to another fan of c is kept only if the gap it leaves between
                 // the fans closes at once, so no vertex is left with two fans.
-                n_new += join_at(mesh, p, nbrs, o, c, &mut self.buf);
-                if gaps_at(mesh, c, &mut self.buf) > 1 {
+                n_new += join_at(mesh, &mut self.seen, p, nbrs, o, c, &mut self.buf);
+                if gaps_at(mesh, c) > 1 {
                     for _ in 0..n_new {
                         mesh.pop();
                     }
+                    mesh.rollback_stamps();
+                    self.failed.insert((a, b), (mesh.clock(), bowtie));
                     continue;
                 }
             }
+            mesh.commit();
             added += n_new;
             self.buf.clear();
             mesh.boundary_at(c, &mut self.buf);
@@ -646,11 +743,11 @@ impl Rounds {
 fn unfold<'b>(
     p: &[DVec3],
     tris: Vec<[u32; 3]>,
-    nbrs: &impl Fn(u32) -> &'b [u32],
+    nbrs: &(impl Fn(u32) -> &'b [u32] + Sync),
     theta: f64,
     rho: f64,
 ) -> (Mesh, usize) {
-    let mut full = Mesh::new(p.len());
+    let mut full = Mesh::with_capacity(p.len(), tris.len());
     for &t in &tris {
         // The sweep's triangles passed the same checks in the same order.
         let added = full.add(t);
@@ -686,13 +783,45 @@ fn unfold<'b>(
             keep[id] = false;
         }
     }
-    let mut mesh = Mesh::new(p.len());
-    let mut dropped = 0;
     let bridge2 = (BRIDGE * rho).powi(2);
-    for (t, k) in tris.into_iter().zip(keep) {
-        let long =
-            (0..3).any(|k| p[t[k] as usize].distance_squared(p[t[(k + 1) % 3] as usize]) > bridge2);
-        if k && !long && !overlaps(&mesh, p, t, nbrs(t[0])) && mesh.add(t).is_some() {
+    let cand: Vec<bool> = tris
+        .iter()
+        .zip(&keep)
+        .map(|(t, &k)| {
+            k && !(0..3)
+                .any(|k| p[t[k] as usize].distance_squared(p[t[(k + 1) % 3] as usize]) > bridge2)
+        })
+        .collect();
+    // The triangles kept before a candidate are some of the candidates before it, so
+    // when it overlaps none of those (tested in parallel on the full mesh, whose ids are
+    // the sweep's order) it overlaps none of the kept ones: the test below is needed
+    // only where this one finds an overlap.
+    let maybe: Vec<bool> = {
+        let full = &full;
+        let cand = &cand;
+        let tris = &tris;
+        (0..tris.len())
+            .into_par_iter()
+            .chunks(4096)
+            .flat_map_iter(|ids| {
+                let mut seen = Visit::default();
+                ids.into_iter().map(move |i| {
+                    cand[i]
+                        && overlaps_among(full, &mut seen, p, tris[i], nbrs(tris[i][0]), |j| {
+                            (j as usize) < i && cand[j as usize]
+                        })
+                })
+            })
+            .collect()
+    };
+    let mut mesh = Mesh::with_capacity(p.len(), tris.len() + tris.len() / 2);
+    let mut seen = Visit::default();
+    let mut dropped = 0;
+    for (i, t) in tris.into_iter().enumerate() {
+        if cand[i]
+            && !(maybe[i] && overlaps(&mesh, &mut seen, p, t, nbrs(t[0])))
+            && mesh.add(t).is_some()
+        {
             continue;
         }
         dropped += 1;
@@ -710,7 +839,23 @@ fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
 /// `near` (those whose centroid is within t's longest edge of t's plane): seen along t's
 /// normal, an edge of one crosses an edge of the other, or a vertex of one lies inside
 /// the other (shared vertices and edges excepted).
-fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
+///
+/// Each triangle is tested once (it is reached from up to three of the points), and
+/// the 18 orientations a pair needs are computed once: the crossing tests and the
+/// inside tests use the same signs (the same expressions as `mesh::crosses`).
+fn overlaps(mesh: &Mesh, seen: &mut Visit, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
+    overlaps_among(mesh, seen, p, t, near, |_| true)
+}
+
+/// [`overlaps`] with only the triangles of `mesh` that `include` accepts.
+fn overlaps_among(
+    mesh: &Mesh,
+    seen: &mut Visit,
+    p: &[DVec3],
+    t: [u32; 3],
+    near: &[u32],
+    include: impl Fn(u32) -> bool,
+) -> bool {
     let n_t = cross(p, t);
     if n_t.length_squared() == 0.0 {
         return true;
@@ -721,35 +866,35 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
     let reach = (0..3)
         .map(|k| (p[t[k] as usize] - p[t[(k + 1) % 3] as usize]).length())
         .fold(0.0, f64::max);
-    let inside = |tri: [u32; 3], q: u32| {
-        if tri.contains(&q) {
-            return false;
-        }
-        let x = p[q as usize];
-        let side = |a: u32, b: u32| {
-            let (pa, pb) = (p[a as usize], p[b as usize]);
-            (pb - pa).cross(x - pa).dot(nu)
-        };
-        let s = [
-            side(tri[0], tri[1]),
-            side(tri[1], tri[2]),
-            side(tri[2], tri[0]),
-        ];
-        (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
-    };
+    let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nu);
+    let pt = t.map(|v| p[v as usize]);
     // Only triangles whose box meets t's box grown by `reach` can overlap it.
     let (lo, hi) = bbox(p, t);
     let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
+    seen.start(mesh.tris.len());
     for &x in t.iter().chain(near) {
         for &f in &mesh.vt[x as usize] {
+            if !include(f) || !seen.first(f) {
+                continue;
+            }
             let o = mesh.tris[f as usize];
             let (olo, ohi) = bbox(p, o);
             if olo.cmpgt(hi).any() || ohi.cmplt(lo).any() {
                 continue;
             }
-            let oc = (p[o[0] as usize] + p[o[1] as usize] + p[o[2] as usize]) / 3.0;
+            let po = o.map(|v| p[v as usize]);
+            let oc = (po[0] + po[1] + po[2]) / 3.0;
             if (oc - p0).dot(nu).abs() > reach {
                 continue;
+            }
+            // d[k][j]: o[j] against t's edge k; e[j][k]: t[k] against o's edge j.
+            let mut d = [[0.0; 3]; 3];
+            let mut e = [[0.0; 3]; 3];
+            for k in 0..3 {
+                for j in 0..3 {
+                    d[k][j] = orient(pt[k], pt[(k + 1) % 3], po[j]);
+                    e[j][k] = orient(po[j], po[(j + 1) % 3], pt[k]);
+                }
             }
             for k in 0..3 {
                 let (u, v) = (t[k], t[(k + 1) % 3]);
@@ -758,19 +903,26 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
                     if r == u || r == v || s == u || s == v {
                         continue;
                     }
-                    if crosses(
-                        nu,
-                        p[u as usize],
-                        p[v as usize],
-                        p[r as usize],
-                        p[s as usize],
-                    ) {
+                    // `crosses(nu, t[k], t[k + 1], o[j], o[j + 1])`.
+                    let (d1, d2) = (d[k][j], d[k][(j + 1) % 3]);
+                    let (d3, d4) = (e[j][k], e[j][(k + 1) % 3]);
+                    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
                         return true;
                     }
                 }
             }
-            if o.iter().any(|&q| inside(t, q)) || t.iter().any(|&q| inside(o, q)) {
-                return true;
+            let strictly_inside = |s: [f64; 3]| {
+                (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
+            };
+            for j in 0..3 {
+                if !t.contains(&o[j]) && strictly_inside([d[0][j], d[1][j], d[2][j]]) {
+                    return true;
+                }
+            }
+            for k in 0..3 {
+                if !o.contains(&t[k]) && strictly_inside([e[0][k], e[1][k], e[2][k]]) {
+                    return true;
+                }
             }
         }
     }
@@ -779,11 +931,9 @@ fn overlaps(mesh: &Mesh, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
 
 /// The directed boundary edges of `mesh`, in triangle order.
 fn boundary_edges(mesh: &Mesh) -> impl Iterator<Item = (u32, u32)> + '_ {
-    mesh.tris.iter().flat_map(move |t| {
-        (0..3).filter_map(move |k| {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            (mesh.edge_tris(a, b)[1] == NONE).then_some((a, b))
-        })
+    mesh.tris.iter().enumerate().flat_map(move |(id, t)| {
+        let bits = mesh.boundary_bits(id as u32);
+        (0..3).filter_map(move |k| (bits & (1 << k) != 0).then_some((t[k], t[(k + 1) % 3])))
     })
 }
 
@@ -796,13 +946,13 @@ const TRIES: usize = 6;
 #[allow(clippy::too_many_arguments)]
 fn close_edge<'b>(
     mesh: &mut Mesh,
+    seen: &mut Visit,
     p: &[DVec3],
     nbrs: &impl Fn(u32) -> &'b [u32],
     o: &ZipOpts,
     a: u32,
     b: u32,
     bowtie: bool,
-    buf: &mut Vec<(u32, u32, u32)>,
     cands: &mut Vec<(f64, u32)>,
 ) -> Option<u32> {
     let w = mesh.edge_tris(a, b)[0];
@@ -819,9 +969,7 @@ fn close_edge<'b>(
             continue;
         }
         if !mesh.vt[c as usize].is_empty() {
-            buf.clear();
-            mesh.boundary_at(c, buf);
-            if buf.is_empty() {
+            if !mesh.on_boundary(c) {
                 continue;
             }
             if !bowtie && !mesh.has_edge(a, c) && !mesh.has_edge(c, b) {
@@ -835,13 +983,15 @@ fn close_edge<'b>(
         .iter()
         .take(TRIES)
         .map(|&(_, c)| c)
-        .find(|&c| try_triangle(mesh, p, nbrs, o, [b, a, c], n_w))
+        .find(|&c| try_triangle(mesh, seen, p, nbrs, o, [b, a, c], n_w))
 }
 
 /// The checks of the module docs on t = (b, a, c) against W's normal `n_w`; adds t when
 /// they pass.
+#[allow(clippy::too_many_arguments)]
 fn try_triangle<'b>(
     mesh: &mut Mesh,
+    seen: &mut Visit,
     p: &[DVec3],
     nbrs: &impl Fn(u32) -> &'b [u32],
     o: &ZipOpts,
@@ -884,7 +1034,7 @@ fn try_triangle<'b>(
     {
         return false;
     }
-    if overlaps(mesh, p, t, nbrs(a)) {
+    if overlaps(mesh, seen, p, t, nbrs(a)) {
         return false;
     }
     mesh.add(t).is_some()

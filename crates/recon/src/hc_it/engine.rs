@@ -137,6 +137,15 @@ struct State<'a> {
     stats: Stats,
     buf: Vec<(u32, u32, u32)>,
     flip_cap: usize,
+    /// Boundary edges a -> b per NC root of a, for the winner scan over a whole NC:
+    /// filled lazily from the mesh's boundary log (`logged` entries taken so far),
+    /// moved along when NCs merge, pruned of edges that stopped being boundary edges
+    /// when scanned.
+    nc_boundary: Vec<Vec<(u32, u32, u32)>>,
+    logged: usize,
+    /// Per triangle slot (3 t + k): the scan (`edge_gen`) that last saw it.
+    edge_mark: Vec<u32>,
+    edge_gen: u32,
 }
 
 /// Runs HC-IT over `order` (the processing order of §3.1). `nbrs(i)` yields the
@@ -155,7 +164,7 @@ pub fn run<'b>(
     let mut s = State {
         p,
         o,
-        mesh: Mesh::new(n),
+        mesh: Mesh::with_capacity(n, 2 * n),
         nc: UnionFind::new(2 * n),
         sm: UnionFind::new(2 * n),
         nc_id: (0..n as u32).collect(),
@@ -164,7 +173,12 @@ pub fn run<'b>(
         stats: Stats::default(),
         buf: Vec::new(),
         flip_cap: 0,
+        nc_boundary: vec![Vec::new(); 2 * n],
+        logged: 0,
+        edge_mark: Vec::new(),
+        edge_gen: 1,
     };
+    s.mesh.log_boundary();
     let mut groups: Vec<(u32, u32)> = Vec::new();
     for (step, &i) in order.iter().enumerate() {
         if step % 4096 == 0 {
@@ -224,6 +238,50 @@ impl State<'_> {
         let t = self.nc_tris[ra as usize] + self.nc_tris[rb as usize];
         let r = self.nc.union(ra, rb);
         self.nc_tris[r as usize] = t;
+        // The merged NC's boundary edges: the shorter list appended to the longer.
+        let gone = if r == ra { rb } else { ra };
+        let mut moved = std::mem::take(&mut self.nc_boundary[gone as usize]);
+        let kept = &mut self.nc_boundary[r as usize];
+        if moved.len() > kept.len() {
+            std::mem::swap(&mut moved, kept);
+        }
+        kept.extend_from_slice(&moved);
+    }
+
+    /// Every boundary edge (a, b, triangle) of the NC `root` (a in it), each once, in no
+    /// particular order (the winner is the minimum of a total order, so the order does
+    /// not matter).
+    fn nc_boundary_edges(&mut self, root: u32, out: &mut Vec<BEdge>) {
+        let log_len = self.mesh.boundary_log().len();
+        for k in self.logged..log_len {
+            let e = self.mesh.boundary_log()[k];
+            let r = self.root_of(e.0);
+            self.nc_boundary[r as usize].push(e);
+        }
+        self.logged = log_len;
+        let mut list = std::mem::take(&mut self.nc_boundary[root as usize]);
+        // Keep each current boundary edge once: an entry is current when its slot still
+        // holds the edge as a boundary edge (every slot that became one was logged, so
+        // each current boundary edge has an entry); a repeat is known by its slot's mark.
+        self.edge_mark.resize(3 * self.mesh.tris.len(), 0);
+        list.retain(|&(a, b, slot)| {
+            if !self.mesh.is_boundary_slot(a, b, slot) {
+                return false;
+            }
+            let m = &mut self.edge_mark[slot as usize];
+            if *m == self.edge_gen {
+                return false;
+            }
+            *m = self.edge_gen;
+            out.push((a, b, slot / 3));
+            true
+        });
+        self.edge_gen += 1;
+        debug_assert!(
+            out.iter()
+                .all(|c| self.nc.find(self.nc_id[c.0 as usize]) == root)
+        );
+        self.nc_boundary[root as usize] = list;
     }
 
     fn root_of(&mut self, v: u32) -> u32 {
@@ -384,21 +442,25 @@ impl State<'_> {
         }
         if cand.is_empty() {
             // The paper's scan over every BTM edge of this NC.
-            for (t, tri) in self.mesh.tris.iter().enumerate() {
-                for k in 0..3 {
-                    let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                    if self.mesh.edge_tris(a, b)[1] == NONE {
-                        cand.push((a, b, t as u32));
+            self.nc_boundary_edges(root, &mut cand);
+            #[cfg(debug_assertions)]
+            {
+                // The same set as a walk over every triangle.
+                let mut all = Vec::new();
+                for (t, tri) in self.mesh.tris.iter().enumerate() {
+                    for k in 0..3 {
+                        let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                        if self.mesh.edge_tris(a, b)[1] == NONE {
+                            all.push((a, b, t as u32));
+                        }
                     }
                 }
+                all.retain(|c| self.nc.find(self.nc_id[c.0 as usize]) == root);
+                all.sort_unstable();
+                let mut got = cand.clone();
+                got.sort_unstable();
+                debug_assert_eq!(got, all, "NC boundary lists out of date");
             }
-            let mut keep = Vec::with_capacity(cand.len());
-            for &c in &cand {
-                if self.root_of(c.0) == root {
-                    keep.push(c);
-                }
-            }
-            cand = keep;
         }
         let rho = self.o.rho;
         let within = |s: &Self, c: &(u32, u32, u32)| {

@@ -74,6 +74,12 @@ pub fn rotate_to(t: [u32; 3], a: u32) -> [u32; 3] {
 }
 
 /// The mesh under construction.
+///
+/// Besides the edge map it keeps, updated on every link and unlink, what the closure
+/// pass and the winner fallback would otherwise recompute by walking every triangle:
+/// the boundary edges of each triangle as bits, the outgoing and incoming boundary
+/// edges of each vertex, a modification stamp per vertex and, when asked for, a log of
+/// the directed edges that became boundary edges.
 #[derive(Debug, Default)]
 pub struct Mesh {
     /// Triangles in stored order (orientation from their NC's first triangle).
@@ -81,6 +87,24 @@ pub struct Mesh {
     edges: HashMap<u64, [u32; 2]>,
     /// Triangles incident to each vertex.
     pub vt: Vec<Vec<u32>>,
+    /// Bit k of `bmask[t]`: edge `t[k] -> t[k + 1]` is a boundary edge (t is its only
+    /// triangle).
+    bmask: Vec<u8>,
+    /// Boundary edges leaving / entering each vertex.
+    bout: Vec<u32>,
+    bin: Vec<u32>,
+    /// Number of links and unlinks so far, and its value at the last change of a
+    /// triangle at each vertex.
+    clock: u64,
+    stamp: Vec<u64>,
+    /// Stamps overwritten since [`Self::savepoint`] (vertex, old stamp), and the clock then.
+    journal: Vec<(u32, u64)>,
+    journaling: bool,
+    saved_clock: u64,
+    /// Directed edges that became boundary edges with their slot 3 t + k, in order
+    /// (only after [`Self::log_boundary`]).
+    log: Vec<(u32, u32, u32)>,
+    logging: bool,
 }
 
 impl Mesh {
@@ -90,7 +114,102 @@ impl Mesh {
             tris: Vec::new(),
             edges: HashMap::default(),
             vt: vec![Vec::new(); n],
+            bmask: Vec::new(),
+            bout: vec![0; n],
+            bin: vec![0; n],
+            clock: 0,
+            stamp: vec![0; n],
+            journal: Vec::new(),
+            journaling: false,
+            saved_clock: 0,
+            log: Vec::new(),
+            logging: false,
         }
+    }
+
+    /// An empty mesh over `n` vertices with room for `tris` triangles (and their edges)
+    /// before it reallocates.
+    pub fn with_capacity(n: usize, tris: usize) -> Self {
+        let mut m = Self::new(n);
+        m.tris.reserve(tris);
+        m.bmask.reserve(tris);
+        m.edges.reserve(tris * 3 / 2 + 16);
+        m
+    }
+
+    /// Starts logging the directed edges that become boundary edges (see
+    /// [`Self::boundary_log`]).
+    pub fn log_boundary(&mut self) {
+        self.logging = true;
+    }
+
+    /// Every directed edge a -> b that became a boundary edge since logging started, in
+    /// order, with its slot 3 t + k (edge k of triangle t); an entry may since have
+    /// stopped being one (see [`Self::is_boundary_slot`]), or appear again.
+    pub fn boundary_log(&self) -> &[(u32, u32, u32)] {
+        &self.log
+    }
+
+    /// Whether slot 3 t + k is a boundary edge a -> b now (then t is its one triangle).
+    #[inline]
+    pub fn is_boundary_slot(&self, a: u32, b: u32, slot: u32) -> bool {
+        let (t, k) = ((slot / 3) as usize, (slot % 3) as usize);
+        let tri = self.tris[t];
+        self.bmask[t] & (1 << k) != 0 && tri[k] == a && tri[(k + 1) % 3] == b
+    }
+
+    /// Whether `v` has a boundary edge (equivalently, [`Self::boundary_at`] finds one).
+    #[inline]
+    pub fn on_boundary(&self, v: u32) -> bool {
+        self.bout[v as usize] + self.bin[v as usize] > 0
+    }
+
+    /// Boundary edges leaving `v`: more than one means several fans at `v`.
+    #[inline]
+    pub fn boundary_out(&self, v: u32) -> u32 {
+        self.bout[v as usize]
+    }
+
+    /// The boundary-edge bits of triangle `t` (bit k: edge `t[k] -> t[k + 1]`).
+    #[inline]
+    pub fn boundary_bits(&self, t: u32) -> u8 {
+        self.bmask[t as usize]
+    }
+
+    /// The modification clock: it advances whenever a triangle is linked or unlinked.
+    #[inline]
+    pub fn clock(&self) -> u64 {
+        self.clock
+    }
+
+    /// The clock at the last change of a triangle at `v` (0 if none).
+    #[inline]
+    pub fn stamp(&self, v: u32) -> u64 {
+        self.stamp[v as usize]
+    }
+
+    /// Starts recording stamp changes, so that a trial that is undone (every triangle
+    /// added since popped again) can also undo its stamps ([`Self::rollback_stamps`]).
+    pub fn savepoint(&mut self) {
+        self.journal.clear();
+        self.journaling = true;
+        self.saved_clock = self.clock;
+    }
+
+    /// Keeps the changes since [`Self::savepoint`].
+    pub fn commit(&mut self) {
+        self.journal.clear();
+        self.journaling = false;
+    }
+
+    /// Restores the stamps and the clock of the [`Self::savepoint`]; the caller has
+    /// undone every change since (the mesh is as it was then).
+    pub fn rollback_stamps(&mut self) {
+        for &(v, old) in self.journal.iter().rev() {
+            self.stamp[v as usize] = old;
+        }
+        self.clock = self.saved_clock;
+        self.commit();
     }
 
     /// The (up to two) triangles of edge {a, b}.
@@ -124,10 +243,14 @@ impl Mesh {
     /// `out` as `(a, b, triangle)`.
     pub fn boundary_at(&self, v: u32, out: &mut Vec<(u32, u32, u32)>) {
         for &t in &self.vt[v as usize] {
+            let bits = self.bmask[t as usize];
+            if bits == 0 {
+                continue;
+            }
             let tri = self.tris[t as usize];
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                if (a == v || b == v) && self.edge_tris(a, b)[1] == NONE {
+                if (a == v || b == v) && bits & (1 << k) != 0 {
                     out.push((a, b, t));
                 }
             }
@@ -154,8 +277,20 @@ impl Mesh {
         }
         let id = self.tris.len() as u32;
         self.tris.push(t);
+        self.bmask.push(0);
         self.link(id, t);
         Some(id)
+    }
+
+    /// Adds `t`, which the caller knows [`Self::can_add`] accepts (a triangle of a valid
+    /// mesh whose triangles are re-added in order, some left out); returns its id.
+    pub fn add_known(&mut self, t: [u32; 3]) -> u32 {
+        debug_assert!(self.can_add(t), "triangle {t:?} cannot be added");
+        let id = self.tris.len() as u32;
+        self.tris.push(t);
+        self.bmask.push(0);
+        self.link(id, t);
+        id
     }
 
     /// Removes the triangle added last (undoes [`Self::add`]).
@@ -163,19 +298,67 @@ impl Mesh {
         if let Some(last) = self.tris.len().checked_sub(1) {
             self.unlink(last as u32);
             self.tris.pop();
+            self.bmask.pop();
+        }
+    }
+
+    /// Slot k of triangle `t` whose edge is {a, b}, with the edge as `t` traverses it.
+    fn slot(&self, t: u32, a: u32, b: u32) -> Option<(usize, u32, u32)> {
+        let tri = self.tris[t as usize];
+        (0..3).find_map(|k| {
+            let (x, y) = (tri[k], tri[(k + 1) % 3]);
+            ((x == a && y == b) || (x == b && y == a)).then_some((k, x, y))
+        })
+    }
+
+    /// Marks slot k (edge x -> y) of triangle `t` as a boundary edge or not.
+    fn set_boundary(&mut self, t: u32, k: usize, x: u32, y: u32, on: bool) {
+        let bit = 1u8 << k;
+        let m = &mut self.bmask[t as usize];
+        if on && *m & bit == 0 {
+            *m |= bit;
+            self.bout[x as usize] += 1;
+            self.bin[y as usize] += 1;
+            if self.logging {
+                self.log.push((x, y, 3 * t + k as u32));
+            }
+        } else if !on && *m & bit != 0 {
+            *m &= !bit;
+            self.bout[x as usize] -= 1;
+            self.bin[y as usize] -= 1;
+        }
+    }
+
+    /// Advances the clock and stamps the vertices of `t`.
+    fn touch(&mut self, t: [u32; 3]) {
+        self.clock += 1;
+        for v in t {
+            if self.journaling {
+                self.journal.push((v, self.stamp[v as usize]));
+            }
+            self.stamp[v as usize] = self.clock;
         }
     }
 
     fn link(&mut self, id: u32, t: [u32; 3]) {
+        self.touch(t);
         for k in 0..3 {
-            let e = self
-                .edges
-                .entry(key(t[k], t[(k + 1) % 3]))
-                .or_insert([NONE, NONE]);
-            if e[0] == NONE {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let e = self.edges.entry(key(a, b)).or_insert([NONE, NONE]);
+            let other = if e[0] == NONE {
                 e[0] = id;
+                NONE
             } else {
                 e[1] = id;
+                e[0]
+            };
+            if other == NONE {
+                self.set_boundary(id, k, a, b, true);
+            } else {
+                if let Some((j, x, y)) = self.slot(other, a, b) {
+                    self.set_boundary(other, j, x, y, false);
+                }
+                self.set_boundary(id, k, a, b, false);
             }
             self.vt[t[k] as usize].push(id);
         }
@@ -183,16 +366,26 @@ impl Mesh {
 
     fn unlink(&mut self, id: u32) {
         let t = self.tris[id as usize];
+        self.touch(t);
         for k in 0..3 {
-            let kk = key(t[k], t[(k + 1) % 3]);
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let kk = key(a, b);
+            let mut left = NONE;
             if let Some(e) = self.edges.get_mut(&kk) {
                 if e[0] == id {
                     e[0] = e[1];
                 }
                 e[1] = NONE;
+                left = e[0];
                 if e[0] == NONE {
                     self.edges.remove(&kk);
                 }
+            }
+            self.set_boundary(id, k, a, b, false);
+            if left != NONE
+                && let Some((j, x, y)) = self.slot(left, a, b)
+            {
+                self.set_boundary(left, j, x, y, true);
             }
             let l = &mut self.vt[t[k] as usize];
             if let Some(pos) = l.iter().position(|&x| x == id) {
