@@ -225,10 +225,9 @@ fn sphere_cap_mesh_obeys_the_rules_and_has_one_boundary_loop() {
     let r = run(&c, params_abs(&c, 0.05));
     let topo = check_mesh_rules(&r, 12.0);
     assert_eq!(topo.boundary_loops().len(), 1);
-    // The only bad facets are the crack-closing slivers (R2, above sliver_angle_deg).
-    assert_eq!(num(&r, "bad_facets"), num(&r, "sliver_facets"));
-    assert_eq!(num(&r, "bad_facets"), num(&r, "bad_r2_small_angle"));
-    assert!(num(&r, "min_angle_deg") > EbtParams::default().sliver_angle_deg);
+    // Sliver facets are off by default: no bad facet.
+    assert_eq!(num(&r, "bad_facets"), 0.0);
+    assert_eq!(num(&r, "sliver_facets"), 0.0);
     // Edges within Omega, or sqrt 2 Omega with crack closing (the default), and every
     // facet in a disc of radius Omega / sqrt 2; vertices are the thinned points, nearly
     // all meshed.
@@ -373,7 +372,6 @@ fn sphere_deviation_stays_within_epsilon() {
         &c,
         EbtParams {
             sliver_flip: false,
-            sliver_angle_deg: 12.0,
             ..params_abs(&c, eps)
         },
     );
@@ -385,10 +383,32 @@ fn sphere_deviation_stays_within_epsilon() {
     assert_eq!(num(&no_slivers, "sliver_facets"), 0.0);
     assert_eq!(num(&no_slivers, "crack_flips"), 0.0);
     assert!(dev_open > 2.0 * eps, "without sliver closing: {dev_open}");
-    assert!(dev <= 2.0 * eps, "with sliver closing: {dev} > 2 eps");
-    assert!(num(&closed, "sliver_facets") > 0.0);
-    assert!(num(&closed, "dev_rms") < num(&no_slivers, "dev_rms"));
+    // The flip alone (default) keeps Rule 2 and closes some of them.
+    assert!(num(&closed, "crack_flips") > 0.0);
+    assert_eq!(num(&closed, "sliver_facets"), 0.0);
     assert!(num(&closed, "dev_above_eps") < num(&no_slivers, "dev_above_eps"));
+    let slivers = run(
+        &c,
+        EbtParams {
+            sliver_angle_deg: 5.0,
+            ..params_abs(&c, eps)
+        },
+    );
+    let dev_closed = interior_deviation(&pts, &slivers.mesh, 2.0 * num(&slivers, "omega") * diag);
+    assert!(
+        dev_closed <= 2.0 * eps,
+        "with sliver closing: {dev_closed} > 2 eps"
+    );
+    // Every sliver is a counted bad facet (R2) above the floor.
+    assert!(num(&slivers, "sliver_facets") > 0.0);
+    assert_eq!(num(&slivers, "bad_facets"), num(&slivers, "sliver_facets"));
+    assert_eq!(
+        num(&slivers, "bad_r2_small_angle"),
+        num(&slivers, "sliver_facets")
+    );
+    assert!(num(&slivers, "min_angle_deg") > 5.0);
+    assert!(num(&slivers, "dev_rms") < num(&no_slivers, "dev_rms"));
+    assert!(num(&slivers, "dev_above_eps") < num(&closed, "dev_above_eps"));
     assert!(num(&closed, "dev_rms") < num(&r, "dev_rms"));
     assert_eq!(MeshTopology::new(&closed.mesh).boundary_loops().len(), 1);
     // The method's own deviation diagnostics are consistent with it.
@@ -573,7 +593,7 @@ fn bad_input_is_an_error() {
         (
             "sliver_angle_deg",
             EbtParams {
-                sliver_angle_deg: f64::NAN,
+                sliver_angle_deg: 12.0,
                 ..EbtParams::default()
             },
         ),

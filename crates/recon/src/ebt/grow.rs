@@ -80,7 +80,7 @@ pub struct GrowOpts {
     pub sliver_flip: bool,
     /// With crack closing, after the growth: smallest angle (radians) of a crack-closing
     /// facet that breaks Rule 2 when neither a Rule-2 ear nor a flip closes the crack (a
-    /// named deviation; such facets are bad facets, R2); `min_angle` or above = none.
+    /// named deviation; such facets are bad facets, R2); `min_angle` = none.
     pub sliver_angle: f64,
 }
 

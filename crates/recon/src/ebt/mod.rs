@@ -330,7 +330,12 @@ impl Reconstructor for Ebt {
                 crack_edge: (p.crack_closing > 0.0).then_some(p.crack_closing * t.omega),
                 link_edge: p.link_edge * t.omega,
                 sliver_flip: p.sliver_flip,
-                sliver_angle: p.sliver_angle_deg.to_radians(),
+                // 0 = off: the floor is Rule 2's theta itself.
+                sliver_angle: if p.sliver_angle_deg > 0.0 {
+                    p.sliver_angle_deg.to_radians()
+                } else {
+                    theta
+                },
             };
             let grown = {
                 let _g = ctx.phase_guard("mesh");

@@ -265,9 +265,9 @@ pub struct EbtParams {
     /// pass (a named deviation, docs/methods/ebt.md); false = such cracks stay open.
     pub sliver_flip: bool,
     /// With crack closing, after the growth: a crack that neither a Rule-2 ear nor a
-    /// flip closes is closed by a facet whose smallest angle exceeds this (degrees), a
-    /// bad facet (R2) (a named deviation, docs/methods/ebt.md); `min_angle_deg` or
-    /// above = none (such cracks stay open).
+    /// flip closes is closed by its ear when the ear's smallest angle exceeds this
+    /// (degrees); such facets are bad facets (R2) (a named deviation, docs/methods/ebt.md).
+    /// 0 = off (the default: such cracks stay open, Rule 2 holds on every facet).
     pub sliver_angle_deg: f64,
     /// Measure the distance of every input point to the mesh (diagnostics `dev_*`).
     pub deviation: bool,
@@ -299,7 +299,7 @@ impl Default for EbtParams {
             crack_closing: std::f64::consts::SQRT_2,
             link_edge: std::f64::consts::SQRT_2,
             sliver_flip: true,
-            sliver_angle_deg: 5.0,
+            sliver_angle_deg: 0.0,
             deviation: true,
         }
     }
@@ -376,7 +376,7 @@ pub const EBT_DOCS: &[ParamDoc] = &[
     ParamDoc::new(
         "sliver_angle_deg",
         Unit::Deg,
-        "with crack closing: close a crack no Rule-2 facet closes by a sliver above this angle, counted bad (R2; deviation); >= min_angle_deg = off",
+        "with crack closing: close a crack no Rule-2 facet closes by a sliver above this angle, counted bad (R2; deviation); 0 = off",
     ),
     ParamDoc::new(
         "deviation",
@@ -445,12 +445,14 @@ impl EbtParams {
                 ),
             ));
         }
-        if !(self.sliver_angle_deg.is_finite() && self.sliver_angle_deg >= 0.0) {
+        if !(self.sliver_angle_deg == 0.0
+            || (self.sliver_angle_deg > 0.0 && self.sliver_angle_deg < self.min_angle_deg))
+        {
             return Err(bad(
                 "sliver_angle_deg",
                 format!(
-                    "must be >= 0 degrees (min_angle_deg or above = off), got {}",
-                    self.sliver_angle_deg
+                    "must be 0 (off) or in (0, min_angle_deg = {}) degrees, got {}",
+                    self.min_angle_deg, self.sliver_angle_deg
                 ),
             ));
         }
