@@ -691,6 +691,23 @@ impl<'a> Front<'a> {
             let Some(nu) = (ns.normalize_or_zero() + nt.normalize_or_zero()).try_normalize() else {
                 continue;
             };
+            // No fold-over with the facets beyond the flipped facet's two other edges
+            // (b -> x and x -> a), which the new facets take over.
+            let beyond = |e0: u32, e1: u32, nrm: DVec3| {
+                self.faces.iter().enumerate().all(|(g, t)| {
+                    g == f as usize
+                        || !(t.contains(&e0) && t.contains(&e1))
+                        || nrm.dot(self.normals[g]) > 0.0
+                })
+            };
+            let (nb, na) = if slot_face.contains(&b) {
+                (ns, nt)
+            } else {
+                (nt, ns)
+            };
+            if !beyond(b, x, nb) || !beyond(x, a, na) {
+                continue;
+            }
             let pv = self.p[v as usize];
             self.gather(pv, 2.0 * self.omega);
             let pr = Proj::new(pv, nu);
