@@ -103,6 +103,8 @@ pub const DIAGNOSTIC_METRICS: &[&str] = &[
     "zip_triangles",
     // ebt: crack closing, enhancements and the mesh-quality histograms (spec §6 item 4).
     "crack_facets",
+    "crack_flips",
+    "sliver_facets",
     "swaps_e20",
     "swaps_e21",
     "feature_edges",

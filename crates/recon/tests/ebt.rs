@@ -225,7 +225,9 @@ fn sphere_cap_mesh_obeys_the_rules_and_has_one_boundary_loop() {
     let r = run(&c, params_abs(&c, 0.05));
     let topo = check_mesh_rules(&r, 12.0);
     assert_eq!(topo.boundary_loops().len(), 1);
+    // Sliver facets are off by default: no bad facet.
     assert_eq!(num(&r, "bad_facets"), 0.0);
+    assert_eq!(num(&r, "sliver_facets"), 0.0);
     // Edges within Omega, or sqrt 2 Omega with crack closing (the default), and every
     // facet in a disc of radius Omega / sqrt 2; vertices are the thinned points, nearly
     // all meshed.
@@ -257,6 +259,8 @@ fn sphere_cap_mesh_obeys_the_rules_and_has_one_boundary_loop() {
     assert_eq!(num(&lit, "long_edge_facets"), 0.0);
     let lit_topo = check_mesh_rules(&lit, 12.0);
     assert_eq!(lit_topo.boundary_loops().len(), 1);
+    assert_eq!(num(&lit, "bad_facets"), 0.0);
+    assert_eq!(num(&lit, "sliver_facets"), 0.0);
     // Crack closing shortens the boundary loop (cracks closed) and adds facets.
     let bl = |t: &MeshTopology| {
         t.boundary_loops()
@@ -359,6 +363,52 @@ fn sphere_deviation_stays_within_epsilon() {
         "literal/eq1 + crack closing: max deviation {dev}, B {bin}"
     );
     assert!(num(&closed, "dev_above_eps") < 0.5 * above_literal);
+    // Sliver cracks (the deviation `sliver_flip` / `sliver_angle_deg`): without them a
+    // channel whose every closing ear is under 12 degrees (its tip is a pair of kept
+    // points 0.16 Omega apart) stays open and points over it are more than 2 eps from
+    // the mesh; closed by a flip or a counted sliver, every interior point is within
+    // the crack-closing bound 2 eps (Omega^2 / (4 r) with Omega^2 = 8 eps r).
+    let no_slivers = run(
+        &c,
+        EbtParams {
+            sliver_flip: false,
+            ..params_abs(&c, eps)
+        },
+    );
+    let dev_open = interior_deviation(
+        &pts,
+        &no_slivers.mesh,
+        2.0 * num(&no_slivers, "omega") * diag,
+    );
+    assert_eq!(num(&no_slivers, "sliver_facets"), 0.0);
+    assert_eq!(num(&no_slivers, "crack_flips"), 0.0);
+    assert!(dev_open > 2.0 * eps, "without sliver closing: {dev_open}");
+    // The flip alone (default) keeps Rule 2 and closes some of them.
+    assert!(num(&closed, "crack_flips") > 0.0);
+    assert_eq!(num(&closed, "sliver_facets"), 0.0);
+    assert!(num(&closed, "dev_above_eps") < num(&no_slivers, "dev_above_eps"));
+    let slivers = run(
+        &c,
+        EbtParams {
+            sliver_angle_deg: 5.0,
+            ..params_abs(&c, eps)
+        },
+    );
+    let dev_closed = interior_deviation(&pts, &slivers.mesh, 2.0 * num(&slivers, "omega") * diag);
+    assert!(
+        dev_closed <= 2.0 * eps,
+        "with sliver closing: {dev_closed} > 2 eps"
+    );
+    // Every sliver is a counted bad facet (R2) above the floor.
+    assert!(num(&slivers, "sliver_facets") > 0.0);
+    assert_eq!(num(&slivers, "bad_facets"), num(&slivers, "sliver_facets"));
+    assert_eq!(
+        num(&slivers, "bad_r2_small_angle"),
+        num(&slivers, "sliver_facets")
+    );
+    assert!(num(&slivers, "min_angle_deg") > 5.0);
+    assert!(num(&slivers, "dev_rms") < num(&no_slivers, "dev_rms"));
+    assert!(num(&slivers, "dev_above_eps") < num(&closed, "dev_above_eps"));
     assert!(num(&closed, "dev_rms") < num(&r, "dev_rms"));
     assert_eq!(MeshTopology::new(&closed.mesh).boundary_loops().len(), 1);
     // The method's own deviation diagnostics are consistent with it.
@@ -537,6 +587,13 @@ fn bad_input_is_an_error() {
             "crack_closing",
             EbtParams {
                 crack_closing: 0.5,
+                ..EbtParams::default()
+            },
+        ),
+        (
+            "sliver_angle_deg",
+            EbtParams {
+                sliver_angle_deg: 12.0,
                 ..EbtParams::default()
             },
         ),

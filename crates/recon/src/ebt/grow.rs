@@ -74,6 +74,14 @@ pub struct GrowOpts {
     /// Longest edge of a growth facet (a named deviation above Omega: the facet must
     /// then fit in a disc of radius Omega / sqrt 2); Omega = Rule 1 and E13 literally.
     pub link_edge: f64,
+    /// With crack closing: an ear that would break Rule 2 (a sliver) is closed together
+    /// with an edge flip against the facet next to it when both facets then pass
+    /// (a named deviation, docs/methods/ebt.md); false = no flip.
+    pub sliver_flip: bool,
+    /// With crack closing, after the growth: smallest angle (radians) of a crack-closing
+    /// facet that breaks Rule 2 when neither a Rule-2 ear nor a flip closes the crack (a
+    /// named deviation; such facets are bad facets, R2); `min_angle` = none.
+    pub sliver_angle: f64,
 }
 
 /// The grown mesh over the points given to [`grow`].
@@ -95,6 +103,10 @@ pub struct Grown {
     pub crack_facets: usize,
     /// Per facet: added by crack closing.
     pub crack_face: Vec<bool>,
+    /// Crack-closing ears closed with an edge flip (sliver ears; [`GrowOpts::sliver_flip`]).
+    pub crack_flips: usize,
+    /// Crack-closing facets under Rule 2's angle ([`GrowOpts::sliver_angle`]).
+    pub sliver_facets: usize,
     /// Points left unmeshed, by the rule that stopped their last try (see [`REASONS`]).
     pub unmeshed_by_reason: [usize; 9],
 }
@@ -148,6 +160,21 @@ struct Front<'a> {
     edge_log: Vec<u64>,
     /// Whether a bridge is tentative.
     logging: bool,
+    /// Sliver ears closed by a flip ([`GrowOpts::sliver_flip`]).
+    sliver_flip: bool,
+    /// Smallest angle of a crack-closing sliver facet (radians): Rule 2's theta during
+    /// the growth, [`GrowOpts::sliver_angle`] after it.
+    sliver_angle: f64,
+    /// Sliver facets (under theta) added by crack closing.
+    slivers: usize,
+    /// Sliver facets added while a bridge is tentative.
+    sliver_log: usize,
+    /// Flips done.
+    flips: usize,
+    /// Facets a flip rewrote while a bridge is tentative: (slot, face, normal, crack flag).
+    flip_log: Vec<(u32, [u32; 3], DVec3, bool)>,
+    /// Edges a flip removed while a bridge is tentative.
+    removed_log: Vec<u64>,
     /// Per point: the rule that stopped its last failed try (see [`REASONS`]).
     reason: Vec<u8>,
 }
@@ -561,7 +588,19 @@ impl<'a> Front<'a> {
             return false;
         }
         let nf = face_cross(pv, pp, pn);
-        if min_angle(pv, pp, pn) <= self.min_angle || !self.within_bound_disc([v, p, n]) {
+        let ang = min_angle(pv, pp, pn);
+        let sliver = ang <= self.min_angle;
+        if sliver {
+            // The deviation for sliver cracks: a flip that keeps Rule 2 first, then
+            // (after the growth) the sliver itself down to `sliver_angle`.
+            if self.sliver_flip && self.close_by_flip(v, max_edge) {
+                return true;
+            }
+            if ang <= self.sliver_angle {
+                return false;
+            }
+        }
+        if !self.within_bound_disc([v, p, n]) {
             return false;
         }
         if nf.dot(self.normals[self.bface[p as usize] as usize]) <= 0.0
@@ -589,7 +628,127 @@ impl<'a> Front<'a> {
         if let Some(x) = self.crack_face.last_mut() {
             *x = true;
         }
+        if sliver {
+            self.slivers += 1;
+            if self.logging {
+                self.sliver_log += 1;
+            }
+        }
         true
+    }
+
+    /// Sliver flip (a named deviation with crack closing, docs/methods/ebt.md): the ear
+    /// `(v, prev v, next v)` across a convex gap breaks Rule 2, so it is closed together
+    /// with a flip of one of its two edges at `v` against the facet on the other side:
+    /// the quadrilateral of the sliver and that facet gets its other diagonal. Taken
+    /// when both new facets pass Rule 2, fit in the disc of radius Omega / sqrt 2, lie
+    /// within 90 degrees of each other, of the flipped facet and of the other boundary
+    /// facet at `v`, the quadrilateral is convex in projection (the diagonals cross),
+    /// the new diagonal is at most `max_edge` and not an edge yet, and the projected
+    /// overlap and free-point tests of [`Self::try_close`] pass. `v` becomes interior
+    /// as with an ear; one facet is added, one rewritten.
+    fn close_by_flip(&mut self, v: u32, max_edge: f64) -> bool {
+        let (p, n) = (self.prev[v as usize], self.next[v as usize]);
+        // Two candidates: the edge v -> n (facet bface[v]) and the edge p -> v (facet
+        // bface[p]); the first whose flip passes is taken.
+        for flip_vn in [true, false] {
+            let f = if flip_vn {
+                self.bface[v as usize]
+            } else {
+                self.bface[p as usize]
+            };
+            let face = self.faces[f as usize];
+            let (a, b) = if flip_vn { (v, n) } else { (p, v) };
+            // The facet holds the directed edge a -> b; x is its third vertex.
+            let Some(k) = (0..3).find(|&k| face[k] == a && face[(k + 1) % 3] == b) else {
+                continue;
+            };
+            let x = face[(k + 2) % 3];
+            if [v, p, n].contains(&x) {
+                continue;
+            }
+            // New facets: the one on the new boundary edge p -> n takes the flipped
+            // facet's slot (so a boundary edge of it keeps its bface entry), the one
+            // at v is added.
+            let (slot_face, new_face, diag, other) = if flip_vn {
+                ([p, n, x], [x, v, p], (p, x), self.bface[p as usize])
+            } else {
+                ([x, p, n], [n, v, x], (n, x), self.bface[v as usize])
+            };
+            let [d0, d1] = [diag.0, diag.1].map(|i| self.p[i as usize]);
+            if self.edges.contains(&edge_key(diag.0, diag.1)) || (d1 - d0).length() > max_edge {
+                continue;
+            }
+            if !self.facet_fits(slot_face, &[f, other]) || !self.facet_fits(new_face, &[f, other]) {
+                continue;
+            }
+            let [s0, s1, s2] = slot_face.map(|i| self.p[i as usize]);
+            let [t0, t1, t2] = new_face.map(|i| self.p[i as usize]);
+            let (ns, nt) = (face_cross(s0, s1, s2), face_cross(t0, t1, t2));
+            if ns.dot(nt) <= 0.0 {
+                continue;
+            }
+            let Some(nu) = (ns.normalize_or_zero() + nt.normalize_or_zero()).try_normalize() else {
+                continue;
+            };
+            // No fold-over with the facets beyond the flipped facet's two other edges
+            // (b -> x and x -> a), which the new facets take over.
+            let beyond = |e0: u32, e1: u32, nrm: DVec3| {
+                self.faces.iter().enumerate().all(|(g, t)| {
+                    g == f as usize
+                        || !(t.contains(&e0) && t.contains(&e1))
+                        || nrm.dot(self.normals[g]) > 0.0
+                })
+            };
+            let (nb, na) = if slot_face.contains(&b) {
+                (ns, nt)
+            } else {
+                (nt, ns)
+            };
+            if !beyond(b, x, nb) || !beyond(x, a, na) {
+                continue;
+            }
+            let pv = self.p[v as usize];
+            self.gather(pv, 2.0 * self.omega);
+            let pr = Proj::new(pv, nu);
+            // Convex quadrilateral: the old diagonal (a-b) and the new one cross.
+            let [pa, pb] = [a, b].map(|i| pr.at(self.p[i as usize]));
+            if !proper_cross(pa, pb, pr.at(d0), pr.at(d1))
+                || !self.segment_ok(&pr, p, n)
+                || !self.empty_triangle(&pr, slot_face)
+                || !self.empty_triangle(&pr, new_face)
+                || self.covers_free_point(&pr, slot_face)
+                || self.covers_free_point(&pr, new_face)
+            {
+                continue;
+            }
+            if self.logging {
+                self.flip_log.push((
+                    f,
+                    face,
+                    self.normals[f as usize],
+                    self.crack_face[f as usize],
+                ));
+                self.removed_log.push(edge_key(a, b));
+            }
+            self.faces[f as usize] = slot_face;
+            self.normals[f as usize] = ns.normalize_or_zero();
+            self.crack_face[f as usize] = true;
+            self.edges.remove(&edge_key(a, b));
+            self.log_edge(edge_key(diag.0, diag.1));
+            let g = self.add_face(new_face);
+            self.crack_face[g as usize] = true;
+            self.log_edge(edge_key(p, n));
+            self.state[v as usize] = INTERIOR;
+            self.next[p as usize] = n;
+            self.prev[n as usize] = p;
+            self.bface[p as usize] = f;
+            self.head = p;
+            self.loop_len -= 1;
+            self.flips += 1;
+            return true;
+        }
+        false
     }
 
     /// Whether the facet `t` has an edge longer than Omega (a long link, deviation
@@ -725,6 +884,9 @@ impl<'a> Front<'a> {
                 self.head,
                 self.loop_len,
             );
+            let (flips_before, flip_log_before, removed_before) =
+                (self.flips, self.flip_log.len(), self.removed_log.len());
+            self.sliver_log = 0;
             self.logging = true;
             let g1 = self.add_face(f1);
             let g2 = self.add_face(f2);
@@ -743,13 +905,27 @@ impl<'a> Front<'a> {
             if filled {
                 self.crack_face[nfaces..].fill(true);
                 self.edge_log.truncate(edges_before);
+                self.flip_log.truncate(flip_log_before);
+                self.removed_log.truncate(removed_before);
                 return true;
             }
+            // Flips rewrote older facets and removed edges: restore them, newest first.
+            while self.flip_log.len() > flip_log_before {
+                let (f, face, nrm, crack) = self.flip_log.pop().expect("flip journal entry");
+                let i = f as usize;
+                (self.faces[i], self.normals[i], self.crack_face[i]) = (face, nrm, crack);
+            }
+            self.flips = flips_before;
+            self.slivers -= self.sliver_log;
+            self.sliver_log = 0;
             for (w, st) in saved.into_iter().rev() {
                 self.restore(w, st);
             }
             for k in self.edge_log.drain(edges_before..) {
                 self.edges.remove(&k);
+            }
+            for k in self.removed_log.drain(removed_before..) {
+                self.edges.insert(k);
             }
             self.faces.truncate(nfaces);
             self.normals.truncate(nfaces);
@@ -993,6 +1169,13 @@ pub fn grow(
         crack_face: Vec::new(),
         edge_log: Vec::new(),
         logging: false,
+        sliver_flip: opts.sliver_flip,
+        sliver_angle: opts.min_angle,
+        slivers: 0,
+        sliver_log: 0,
+        flips: 0,
+        flip_log: Vec::new(),
+        removed_log: Vec::new(),
         reason: vec![R_FAR; n],
     };
     let f0 = fr.add_face(t0);
@@ -1077,6 +1260,11 @@ pub fn grow(
         pending = deferred;
     }
     if let Some(e) = opts.crack_edge {
+        // IMPL-CHOICE (sliver cracks, docs/methods/ebt.md): after the growth a crack
+        // whose only closing facet breaks Rule 2 may be closed by it down to
+        // sliver_angle; during the growth Rule 2 holds (a sliver there would steer the
+        // points still to come).
+        fr.sliver_angle = opts.sliver_angle.min(opts.min_angle);
         fr.crack_count += fr.close_cracks(e);
         let before = fr.faces.len();
         let mut u = fr.head;
@@ -1104,6 +1292,8 @@ pub fn grow(
     Ok(Grown {
         unmeshed_by_reason,
         crack_facets,
+        crack_flips: fr.flips,
+        sliver_facets: fr.slivers,
         crack_face: fr.crack_face,
         meshed: fr.state.iter().map(|&x| x != FREE).collect(),
         faces: fr.faces,

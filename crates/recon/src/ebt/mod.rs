@@ -329,6 +329,13 @@ impl Reconstructor for Ebt {
                 seed,
                 crack_edge: (p.crack_closing > 0.0).then_some(p.crack_closing * t.omega),
                 link_edge: p.link_edge * t.omega,
+                sliver_flip: p.sliver_flip,
+                // 0 = off: the floor is Rule 2's theta itself.
+                sliver_angle: if p.sliver_angle_deg > 0.0 {
+                    p.sliver_angle_deg.to_radians()
+                } else {
+                    theta
+                },
             };
             let grown = {
                 let _g = ctx.phase_guard("mesh");
@@ -388,6 +395,8 @@ impl Reconstructor for Ebt {
             num(&mut d, "passes", grown.passes as f64);
             num(&mut d, "ears", grown.ears as f64);
             num(&mut d, "crack_facets", grown.crack_facets as f64);
+            num(&mut d, "crack_flips", grown.crack_flips as f64);
+            num(&mut d, "sliver_facets", grown.sliver_facets as f64);
             for (name, k) in grow::REASONS.iter().zip(grown.unmeshed_by_reason) {
                 num(&mut d, &format!("unmeshed_{name}"), k as f64);
             }

@@ -260,6 +260,15 @@ pub struct EbtParams {
     /// docs/methods/ebt.md): above 1, a facet with a longer edge must fit in a disc of
     /// radius Omega / sqrt 2; 1 = Rule 1 and ASSUMPTION E13 literally.
     pub link_edge: f64,
+    /// With crack closing: a crack ear that would break Rule 2 (a sliver) is closed
+    /// together with an edge flip against the facet next to it when both facets then
+    /// pass (a named deviation, docs/methods/ebt.md); false = such cracks stay open.
+    pub sliver_flip: bool,
+    /// With crack closing, after the growth: a crack that neither a Rule-2 ear nor a
+    /// flip closes is closed by its ear when the ear's smallest angle exceeds this
+    /// (degrees); such facets are bad facets (R2) (a named deviation, docs/methods/ebt.md).
+    /// 0 = off (the default: such cracks stay open, Rule 2 holds on every facet).
+    pub sliver_angle_deg: f64,
     /// Measure the distance of every input point to the mesh (diagnostics `dev_*`).
     pub deviation: bool,
 }
@@ -289,6 +298,8 @@ impl Default for EbtParams {
             equilateral: false,
             crack_closing: std::f64::consts::SQRT_2,
             link_edge: std::f64::consts::SQRT_2,
+            sliver_flip: true,
+            sliver_angle_deg: 0.0,
             deviation: true,
         }
     }
@@ -358,6 +369,16 @@ pub const EBT_DOCS: &[ParamDoc] = &[
         "longest growth edge x Omega if the facet fits in a disc of radius Omega/sqrt 2 (deviation; 1.414); 1 = literal",
     ),
     ParamDoc::new(
+        "sliver_flip",
+        Unit::Flag,
+        "with crack closing: close a sliver crack ear by flipping an edge with its neighbour facet (deviation); off = leave it open",
+    ),
+    ParamDoc::new(
+        "sliver_angle_deg",
+        Unit::Deg,
+        "with crack closing: close a crack no Rule-2 facet closes by a sliver above this angle, counted bad (R2; deviation); 0 = off",
+    ),
+    ParamDoc::new(
         "deviation",
         Unit::Flag,
         "measure every input point's distance to the mesh (dev_* diagnostics)",
@@ -421,6 +442,17 @@ impl EbtParams {
                 format!(
                     "must be in [1, sqrt 2 = 1.4142135623730951] (a multiple of Omega), got {}",
                     self.link_edge
+                ),
+            ));
+        }
+        if !(self.sliver_angle_deg == 0.0
+            || (self.sliver_angle_deg > 0.0 && self.sliver_angle_deg < self.min_angle_deg))
+        {
+            return Err(bad(
+                "sliver_angle_deg",
+                format!(
+                    "must be 0 (off) or in (0, min_angle_deg = {}) degrees, got {}",
+                    self.min_angle_deg, self.sliver_angle_deg
                 ),
             ));
         }
