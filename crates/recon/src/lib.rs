@@ -37,6 +37,6 @@ pub use ball_pivoting::{BallPivoting, BallPivotingParams};
 pub use cocone::{Cocone, CoconeParams, TightCocone, TightCoconeParams};
 pub use ebt::{Ebt, EbtParams};
 pub use hc_it::{HcIt, HcItParams};
-pub use poisson::{Poisson, PoissonParams};
+pub use poisson::{Poisson, PoissonParams, VertexFit as PoissonVertexFit};
 pub use priority_front::{PriorityFront, PriorityFrontParams};
 pub use ufm::{Ufm, UfmMesh, UfmMeshParams, UfmParams};

@@ -15,6 +15,8 @@ use rayon::prelude::*;
 use reconbench_geom::method::MethodError;
 use reconbench_geom::spatial::PointIndex;
 
+use super::params::VertexFit;
+
 /// The six monotone paths from a cell's corner `(0, 0, 0)` to `(1, 1, 1)`: the axis
 /// order of each Kuhn tetrahedron.
 const PATHS: [[usize; 3]; 6] = [
@@ -39,6 +41,8 @@ pub(crate) struct Field<'a> {
     pub origin: DVec3,
     /// Cell side.
     pub cell: f64,
+    /// How a vertex is placed on its grid edge.
+    pub fit: VertexFit,
 }
 
 impl Field<'_> {
@@ -62,47 +66,100 @@ impl Field<'_> {
     /// Where `chi - iso` changes sign on the edge from node `a` along `d`, as a
     /// fraction of the edge. The indicator is a smoothed step a few cells wide, far
     /// from linear across an edge, so linear interpolation of the two end values misses
-    /// the crossing by up to a tenth of a cell; the cubic through the four nodes
-    /// `a - d, a, a + d, a + 2d` on the edge's line (Lagrange) follows the step, and its
-    /// root in the bracket is found by bisection. Linear where the line leaves the grid
-    /// or the cubic does not change sign in the bracket.
+    /// the crossing by up to a tenth of a cell. The root is taken on the tricubic
+    /// (Lagrange) interpolant of the 4x4x4 nodes around the cell holding the edge,
+    /// restricted to the edge, by bisection: on an axis edge that is the cubic through
+    /// the four nodes on the edge's line; on a face or body diagonal of a Kuhn
+    /// tetrahedron it still uses nodes one cell apart, where a cubic through the nodes
+    /// on the diagonal's own line (`sqrt 2` or `sqrt 3` cells apart) misses a step a few
+    /// cells wide by several times more (`docs/methods/poisson.md`, Figures). Linear
+    /// where the stencil leaves the grid.
     fn crossing(&self, a: [usize; 3], d: [usize; 3]) -> f64 {
-        let at = |m: i64| -> Option<f64> {
-            let c = [0, 1, 2].map(|k| a[k] as i64 + m * d[k] as i64);
-            if c.iter().any(|&v| v < 0 || v >= self.n as i64) {
-                return None;
-            }
-            let c = c.map(|v| v as usize);
-            Some(f64::from(self.x[self.id(c)]) - f64::from(self.iso))
-        };
-        let (Some(p1), Some(p2)) = (at(0), at(1)) else {
-            return 0.5;
-        };
+        let val = |c: [usize; 3]| f64::from(self.x[self.id(c)]) - f64::from(self.iso);
+        let p1 = val(a);
+        let p2 = val([a[0] + d[0], a[1] + d[1], a[2] + d[2]]);
         let linear = if p1 == p2 { 0.5 } else { p1 / (p1 - p2) };
-        let (Some(p0), Some(p3)) = (at(-1), at(2)) else {
-            return linear;
-        };
-        // Lagrange cubic through t = -1, 0, 1, 2.
-        let cubic = |t: f64| {
-            -p0 * t * (t - 1.0) * (t - 2.0) / 6.0 + p1 * (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0
-                - p2 * (t + 1.0) * t * (t - 2.0) / 2.0
-                + p3 * (t + 1.0) * t * (t - 1.0) / 6.0
-        };
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
-        let flo = cubic(lo);
-        if flo == 0.0 || (flo > 0.0) == (cubic(hi) > 0.0) {
+        if p1 == 0.0 || (p1 > 0.0) == (p2 > 0.0) {
             return linear;
         }
-        for _ in 0..30 {
-            let mid = 0.5 * (lo + hi);
-            if (cubic(mid) > 0.0) == (flo > 0.0) {
-                lo = mid;
-            } else {
-                hi = mid;
+        let axes: Vec<usize> = (0..3).filter(|&k| d[k] == 1).collect();
+        if axes.iter().any(|&k| a[k] < 1 || a[k] + 2 >= self.n) {
+            return linear;
+        }
+        // IMPL-CHOICE (vertex placement, `vertex_fit`): tricubic by default; the cubic
+        // on the edge's own line (the behaviour before) and the linear fit are kept.
+        match self.fit {
+            VertexFit::Linear => return linear,
+            VertexFit::EdgeCubic => {
+                let on_line =
+                    |m: i64| val([0, 1, 2].map(|k| (a[k] as i64 + m * d[k] as i64) as usize));
+                let (p0, p3) = (on_line(-1), on_line(2));
+                let f = |t: f64| {
+                    let l = lagrange(t);
+                    l[0] * p0 + l[1] * p1 + l[2] * p2 + l[3] * p3
+                };
+                return bisect(&f, p1);
             }
+            VertexFit::Tricubic => {}
         }
-        0.5 * (lo + hi)
+        // The 4^m stencil values (m varying axes), first varying axis fastest.
+        let m = axes.len();
+        let mut vals = [0f64; 64];
+        for (s, v) in vals.iter_mut().enumerate().take(1 << (2 * m)) {
+            let mut c = a;
+            for (q, &k) in axes.iter().enumerate() {
+                c[k] = a[k] + ((s >> (2 * q)) & 3) - 1;
+            }
+            *v = val(c);
+        }
+        let f = |t: f64| {
+            let l = lagrange(t);
+            let mut acc = [0f64; 16];
+            let rows = 1 << (2 * (m - 1));
+            for (r, out) in acc.iter_mut().enumerate().take(rows) {
+                let v = &vals[4 * r..4 * r + 4];
+                *out = l[0] * v[0] + l[1] * v[1] + l[2] * v[2] + l[3] * v[3];
+            }
+            match m {
+                1 => acc[0],
+                2 => l[0] * acc[0] + l[1] * acc[1] + l[2] * acc[2] + l[3] * acc[3],
+                _ => {
+                    let mut s = 0.0;
+                    for (z, lz) in l.iter().enumerate() {
+                        let b = &acc[4 * z..4 * z + 4];
+                        s += lz * (l[0] * b[0] + l[1] * b[1] + l[2] * b[2] + l[3] * b[3]);
+                    }
+                    s
+                }
+            }
+        };
+        bisect(&f, p1)
     }
+}
+
+/// The cubic Lagrange basis on the nodes `-1, 0, 1, 2` at `t`.
+#[inline]
+fn lagrange(t: f64) -> [f64; 4] {
+    [
+        -t * (t - 1.0) * (t - 2.0) / 6.0,
+        (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0,
+        -(t + 1.0) * t * (t - 2.0) / 2.0,
+        (t + 1.0) * t * (t - 1.0) / 6.0,
+    ]
+}
+
+/// A root of `f` in `[0, 1]` by bisection, `f(0) = f0` and `f(1)` of opposite signs.
+fn bisect(f: &dyn Fn(f64) -> f64, f0: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..30 {
+        let mid = 0.5 * (lo + hi);
+        if (f(mid) > 0.0) == (f0 > 0.0) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// Crossing edges of the nodes of one plane: sorted keys and vertex positions.

@@ -36,7 +36,7 @@ use reconbench_geom::method::{
 use reconbench_geom::spatial::knn_self_table;
 use reconbench_geom::{PointCloud, TriMesh};
 
-pub use params::{PARAM_DOCS, PoissonParams};
+pub use params::{PARAM_DOCS, PoissonParams, VertexFit};
 
 use crate::ball_pivoting::input;
 use crate::diag::num;
@@ -211,6 +211,15 @@ impl Poisson {
                 .collect();
             if let Some(top) = levels.last_mut() {
                 top.b = screened::divergence_rhs(grid.cells, &g, &nrm, &area);
+                // IMPL-CHOICE P-04 (the normal field in the B-spline basis): PoissonRecon
+                // splats each normal onto B-spline coefficients with the quadratic
+                // B-spline weights and represents V as the sum of those coefficients
+                // times the quadratic B-splines; V at our edge midpoints is then our
+                // point-sampled splat filtered by the B-spline's values at the integers,
+                // (1/8, 3/4, 1/8) per axis. The filter commutes with the divergence, so
+                // it is applied to b. `field_smoothing = 0` is the point-sampled kernel
+                // alone (the behaviour before; the surface is noisier at the cell scale).
+                screened::smooth(&mut top.b, top.n, p.field_smoothing);
             }
             levels
         });
@@ -245,6 +254,7 @@ impl Poisson {
             iso,
             origin: grid.origin,
             cell: grid.cell,
+            fit: p.vertex_fit,
         };
         let (mut vertices, mut faces) =
             ctx.phase("extract", || extract::marching_tetrahedra(&field));

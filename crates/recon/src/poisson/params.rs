@@ -3,6 +3,24 @@
 use reconbench_geom::method::{MethodError, ParamDoc, Unit};
 use serde::{Deserialize, Serialize};
 
+/// How a vertex of the iso-surface is placed on its grid edge (marching tetrahedra puts
+/// vertices on the axis edges and on the face and body diagonals of the cells).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum VertexFit {
+    /// Root of the tricubic (Lagrange, 4x4x4 nodes) interpolant of the indicator along
+    /// the edge: nodes one cell apart on every edge kind (the default).
+    #[default]
+    Tricubic,
+    /// Root of the cubic through the four nodes on the edge's own line (the behaviour
+    /// before the tricubic fit: on a diagonal those nodes are `sqrt 2` or `sqrt 3`
+    /// cells apart, and the surface is noisier there).
+    EdgeCubic,
+    /// Linear interpolation of the two end values (classic marching cubes/tetrahedra,
+    /// and Open3D's `linear_fit = True`).
+    Linear,
+}
+
 /// Parameters of `poisson`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -23,6 +41,12 @@ pub struct PoissonParams {
     pub tolerance: f64,
     /// Gauss-Seidel sweeps before and after the coarse-grid correction of a V-cycle.
     pub sweeps: usize,
+    /// Side weight `w` of the `(w, 1 - 2w, w)` filter applied along each axis to the
+    /// splatted normal field: 1/8 represents it in the quadratic B-spline basis as
+    /// PoissonRecon does (IMPL-CHOICE P-04); 0 keeps the point-sampled splat alone.
+    pub field_smoothing: f64,
+    /// How each vertex is placed on its grid edge.
+    pub vertex_fit: VertexFit,
     /// Share of the output vertices with the lowest sample density to remove (0: keep
     /// the watertight surface).
     pub trim_quantile: f64,
@@ -42,6 +66,8 @@ impl Default for PoissonParams {
             max_cycles: 40,
             tolerance: 1e-4,
             sweeps: 2,
+            field_smoothing: 0.125,
+            vertex_fit: VertexFit::Tricubic,
             trim_quantile: 0.0,
             trim_radius_cells: 2.0,
             max_flipped_share: 0.2,
@@ -80,6 +106,16 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "sweeps",
         Unit::Count,
         "Gauss-Seidel sweeps before and after each coarse-grid correction",
+    ),
+    ParamDoc::new(
+        "field_smoothing",
+        Unit::None,
+        "side weight w of the (w, 1-2w, w) per-axis filter of the normal field: 1/8 is PoissonRecon's B-spline representation, 0 the point-sampled splat (in [0, 0.25])",
+    ),
+    ParamDoc::new(
+        "vertex_fit",
+        Unit::Choice,
+        "vertex placement on a grid edge: tricubic (root of the 4x4x4-node interpolant), edge-cubic (cubic through the edge's line, the old behaviour), linear",
     ),
     ParamDoc::new(
         "trim_quantile",
@@ -133,6 +169,12 @@ impl PoissonParams {
         }
         if !(1..=50).contains(&self.sweeps) {
             return bad("sweeps", format!("must be in 1..=50, got {}", self.sweeps));
+        }
+        if !(0.0..=0.25).contains(&self.field_smoothing) {
+            return bad(
+                "field_smoothing",
+                format!("must be in [0, 0.25], got {}", self.field_smoothing),
+            );
         }
         if !(0.0..1.0).contains(&self.trim_quantile) {
             return bad(

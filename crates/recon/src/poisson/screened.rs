@@ -405,3 +405,34 @@ pub(crate) fn divergence_rhs(cells: usize, g: &[DVec3], nrm: &[DVec3], area: &[f
     }
     b
 }
+
+/// Filters the grid function `x` (nodes per side `n`) with `(w, 1 - 2w, w)` along each
+/// axis in turn, the values beyond the grid taken as zero (so the sum is kept when the
+/// boundary nodes are zero, as they are for the right-hand side: the samples lie at
+/// least two cells inside). `w = 1/8` is the quadratic B-spline at the integers (see
+/// `field_smoothing`); `w = 0` leaves `x` unchanged. Each output node depends only on
+/// the input, so the result does not depend on the thread split.
+pub(crate) fn smooth(x: &mut [f32], n: usize, w: f64) {
+    if w == 0.0 {
+        return;
+    }
+    let (w, c) = (w as f32, (1.0 - 2.0 * w) as f32);
+    let plane = n * n;
+    for axis in 0..3 {
+        let stride = [1, n, plane][axis];
+        let src = x.to_vec();
+        x.par_chunks_mut(plane).enumerate().for_each(|(k, out)| {
+            let g0 = k * plane;
+            for j in 0..n {
+                for i in 0..n {
+                    let l = j * n + i;
+                    let id = g0 + l;
+                    let co = [i, j, k][axis];
+                    let lo = if co > 0 { src[id - stride] } else { 0.0 };
+                    let hi = if co + 1 < n { src[id + stride] } else { 0.0 };
+                    out[l] = c * src[id] + w * (lo + hi);
+                }
+            }
+        });
+    }
+}
