@@ -636,6 +636,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "I15: loops with more vertices are not tried (4096)",
     ),
     ParamDoc::new(
+        "fill_holes_dp",
+        Unit::Flag,
+        "I15: loops the ears cannot close are triangulated by dynamic programming, least largest fold (true; false = ears only)",
+    ),
+    ParamDoc::new(
         "insert_covered",
         Unit::Flag,
         "I15: insert unmeshed points covered by a triangle into it (true; false = paper)",
