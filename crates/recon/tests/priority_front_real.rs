@@ -63,6 +63,36 @@ fn assert_issue_20_target(name: &str, genus: u32, loops: usize, threads: usize) 
     }
 }
 
+/// Rocker arm (10,044 vertices, genus 1, closed), one and two threads, three seeds:
+/// watertight with genus 1 in one piece. Four of the six runs left one 4-edge loop that
+/// every ear folds or crosses (its rim faces overlap); IMPL-CHOICE I17 peels the rim and
+/// closes it, and the same runs with `fill_holes_peel = 0` keep it.
+#[test]
+fn rocker_arm_vertices_are_watertight_genus_one() {
+    let mesh = real("rocker-arm");
+    let mut kept_without_peel = 0;
+    for threads in [1, 2] {
+        for seed in [1, 2, 3] {
+            let rec = run(mesh.vertices().to_vec(), threads, seed);
+            let t = analyze(&rec.mesh);
+            assert_manifold_oriented(&t);
+            assert!(t.watertight, "threads {threads} seed {seed}: {t:?}");
+            assert_eq!(t.components, 1, "threads {threads} seed {seed}");
+            assert_eq!(t.genus, Some(1), "threads {threads} seed {seed}");
+            let pf = PriorityFront::new(PriorityFrontParams {
+                threads,
+                fill_holes_peel: 0,
+                ..PriorityFrontParams::default()
+            })
+            .expect("valid params");
+            let cloud = PointCloud::new(mesh.vertices().to_vec()).expect("finite points");
+            let lit = pf.reconstruct(&cloud, &mut RunCtx::new(seed)).expect("run");
+            kept_without_peel += analyze(&lit.mesh).n_boundary_loops();
+        }
+    }
+    assert!(kept_without_peel >= 3, "{kept_without_peel}");
+}
+
 /// 3holes (3,596 vertices, genus 3, closed; nearly uniform vertex spacing: mesh edges
 /// at most 2.1 ρ): watertight with genus 3 in one piece for three seeds, and no vertex
 /// refused (11-16 before IMPL-CHOICE I15 inserted the covered points, 25-26 without
@@ -228,7 +258,7 @@ fn fandisk_vertices_issue_20_target() {
 }
 
 #[test]
-#[ignore = "issue 20 open: genus 1, 1 component, 0-1 loops (4 edges), 10-13 refused"]
+#[ignore = "issue 20 open: genus 1, 1 component, watertight, but 7-13 refused"]
 fn rocker_arm_vertices_issue_20_target() {
     assert_issue_20_target("rocker-arm", 1, 0, 1);
 }

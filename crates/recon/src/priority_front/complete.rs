@@ -87,6 +87,18 @@ impl Mesher<'_> {
             .into_iter()
             .filter(|l| l.len() >= 3 && l.len() <= max_len)
             .collect();
+        self.fill_loops(loops, max_edge, edge_rel, dp)
+    }
+
+    /// Closes those of the front loops `loops` (vertex cycles in front order) that the
+    /// planners of [`Mesher::fill_holes`] can close whole; returns how many.
+    pub(super) fn fill_loops(
+        &mut self,
+        loops: Vec<Vec<u32>>,
+        max_edge: f64,
+        edge_rel: f64,
+        dp: bool,
+    ) -> u64 {
         if loops.is_empty() {
             return 0;
         }

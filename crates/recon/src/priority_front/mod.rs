@@ -35,6 +35,7 @@ mod mesher;
 mod orient;
 mod parallel;
 pub mod params;
+mod peel;
 mod run;
 mod seed;
 mod triangulate;
@@ -185,12 +186,14 @@ impl PriorityFront {
         // M0-M8.
         let t_grow = Instant::now();
         let mut grown = if p.threads <= 1 {
-            grow_serial(&lay, cfg, &dcfg, &mut rng, ctx, t_grow)?
+            grow_serial(&lay, cfg.clone(), &dcfg, &mut rng, ctx, t_grow)?
         } else {
             let mut outs = grow_slabs_phase(&lay, &cfg, &dcfg, ctx, t_grow)?;
-            stitch_phase(&lay, cfg, &dcfg, &mut outs, &mut rng, ctx)?
+            stitch_phase(&lay, cfg.clone(), &dcfg, &mut outs, &mut rng, ctx)?
         };
         let grow_secs = t_grow.elapsed().as_secs_f64();
+        let peeled = peel_phase(&mut grown, &lay, &cfg, p, ctx);
+        num(&mut diag, "holes_peeled", peeled as f64);
         let inserted = insert_phase(&mut grown, &lay, p, rho, ctx);
         num(&mut diag, "inserted_points", inserted as f64);
 
@@ -503,6 +506,40 @@ fn fill_phase(m: &mut Mesher, p: &PriorityFrontParams) -> u64 {
     )
 }
 
+/// IMPL-CHOICE I17 (timed as `peel`): the loops left open by the fill, retried with
+/// their rim faces removed. Returns how many were closed.
+fn peel_phase(
+    grown: &mut Grown,
+    lay: &Layout,
+    cfg: &Cfg,
+    p: &PriorityFrontParams,
+    ctx: &mut RunCtx,
+) -> u64 {
+    if p.fill_holes_peel == 0 || p.fill_holes_max_edge <= 0.0 {
+        return 0;
+    }
+    ctx.phase("peel", || {
+        peel::peel_refill(
+            &lay.pts,
+            &lay.grid,
+            cfg,
+            &lay.refused0,
+            peel::PeelMesh {
+                tris: &mut grown.tris,
+                state: &mut grown.state,
+                loops: &mut grown.loops,
+            },
+            peel::FillBounds {
+                max_edge: p.fill_holes_max_edge * cfg.r,
+                edge_rel: p.fill_holes_edge_rel,
+                max_loop: p.fill_holes_max_loop,
+                dp: p.fill_holes_dp,
+            },
+            p.fill_holes_peel,
+        )
+    })
+}
+
 /// IMPL-CHOICE I15, points (timed as `complete`): the unmeshed points covered by a
 /// triangle are inserted into it. Returns how many.
 fn insert_phase(
@@ -596,7 +633,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{},insert:{},plane_h<=max({}rho,{}rms) threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} insert:{},plane_h<=max({}rho,{}rms) threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -631,6 +668,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.fill_holes_edge_rel,
         p.fill_holes_max_loop,
         p.fill_holes_dp,
+        p.fill_holes_peel,
         p.insert_covered,
         p.insert_height,
         p.insert_rel,

@@ -196,6 +196,10 @@ pub struct PriorityFrontParams {
     /// loop's vertices, under the same bounds; loops of at most 400 vertices). false =
     /// ears only. Default true.
     pub fill_holes_dp: bool,
+    /// IMPL-CHOICE I17: a loop the I15 fillers cannot close is enlarged by removing the
+    /// faces within 1, 2, ... up to this many vertex rings of it, and the enlarged loop
+    /// is filled; where that fails too, the faces are put back. 0 = off. Default 2.
+    pub fill_holes_peel: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
     /// projects into a triangle within the I12 height bound of it (a covered point) is
     /// inserted there. false = the paper (such points are refused). Default true.
@@ -281,6 +285,7 @@ impl Default for PriorityFrontParams {
             fill_holes_edge_rel: 1.5,
             fill_holes_max_loop: 4096,
             fill_holes_dp: true,
+            fill_holes_peel: 2,
             insert_covered: true,
             insert_height: 0.1,
             insert_rel: 3.0,
@@ -431,6 +436,9 @@ impl PriorityFrontParams {
                 "insert_rel",
                 format!("must be in [0, 1000], got {}", self.insert_rel),
             ));
+        }
+        if self.fill_holes_peel > 8 {
+            return Err(bad("fill_holes_peel", "must be <= 8"));
         }
         if self.fill_holes_max_loop > 1_000_000 {
             return Err(bad("fill_holes_max_loop", "must be <= 1000000"));
@@ -639,6 +647,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "fill_holes_dp",
         Unit::Flag,
         "I15: loops the ears cannot close are triangulated by dynamic programming, least largest fold (true; false = ears only)",
+    ),
+    ParamDoc::new(
+        "fill_holes_peel",
+        Unit::Count,
+        "I17: loops the fillers cannot close are retried with up to this many rings of rim faces removed, which are put back on failure (2; 0 = off)",
     ),
     ParamDoc::new(
         "insert_covered",
