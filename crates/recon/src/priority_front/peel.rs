@@ -397,11 +397,15 @@ mod tests {
         let vf = VertexFaces::new((m * m) as usize, &tris);
         let peels = plan_peels(&tris, &loops, &vf, 16, 1, (m * m) as usize);
         assert!(peels.is_empty(), "{}", peels.len());
-        let far = grid_mesh(m, &[1 * (m - 1) + 1, 5 * (m - 1) + 5]);
+        let far = grid_mesh(m, &[(m - 1) + 1, 5 * (m - 1) + 5]);
         let loops = vec![hole_loop(m, 1, 1), hole_loop(m, 5, 5)];
         let vf = VertexFaces::new((m * m) as usize, &far);
         let peels = plan_peels(&far, &loops, &vf, 16, 1, (m * m) as usize);
         assert_eq!(peels.len(), 2);
-        assert!(peels.iter().all(|p| p.faces.len() == 4 && p.grown.len() == 8));
+        assert!(
+            peels
+                .iter()
+                .all(|p| p.faces.len() == 4 && p.grown.len() == 8)
+        );
     }
 }
