@@ -1,6 +1,8 @@
-//! A hashed uniform grid of the points for one ball radius: cells of side `2ρ`, so every
-//! point within `2ρ` of a point lies in that point's cell or one of the 26 around it.
-//! It gives the neighbour rows of a pass without a tree walk or sorting the results.
+//! A uniform grid of the points for one ball radius: cells of side `2ρ`, so every point
+//! within `2ρ` of a point lies in that point's cell or one of the 26 around it. It gives
+//! the neighbour rows of a pass without a tree walk or sorting the results. The cells
+//! are a dense array over the points' box, or a hash map of the occupied ones when the
+//! box would need too many.
 
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -31,6 +33,44 @@ impl Hash for CellKey {
 
 type CellMap = HashMap<CellKey, (u32, u32), foldhash::fast::FixedState>;
 
+/// A dense cell array is used while the points' box holds at most this many cells per
+/// point (plus [`DENSE_EXTRA`]); a sampled surface with cells of twice the ball
+/// radius has a few per point (the 100k torus: 3.7 in the first pass).
+const DENSE_CELLS_PER_POINT: f64 = 16.0;
+/// See [`DENSE_CELLS_PER_POINT`].
+const DENSE_EXTRA: f64 = 4096.0;
+
+/// Where each cell's points are in `items`.
+#[derive(Debug, PartialEq)]
+enum Cells {
+    /// IMPL-CHOICE: an array over the points' box, `(x * dims[1] + y) * dims[2] + z`
+    /// (lexicographic like the cell coordinates): cell `c` holds
+    /// `items[start[c]..start[c + 1]]`. A look-up is an index instead of a hash, and
+    /// the points are ordered by a counting sort. For the boxes that would need too
+    /// many cells (scattered or very elongated input) the hash map below.
+    Dense { dims: [i64; 3], start: Vec<u32> },
+    /// Occupied cell -> `(start, len)`.
+    Hashed(CellMap),
+}
+
+impl Cells {
+    /// `(start, len)` of the points of cell `k`, `None` when it has none.
+    #[inline]
+    fn get(&self, k: [i64; 3]) -> Option<(u32, u32)> {
+        match self {
+            Cells::Dense { dims, start } => {
+                if (0..3).any(|a| k[a] < 0 || k[a] >= dims[a]) {
+                    return None;
+                }
+                let c = ((k[0] * dims[1] + k[1]) * dims[2] + k[2]) as usize;
+                let (s, e) = (start[c], start[c + 1]);
+                (e > s).then_some((s, e - s))
+            }
+            Cells::Hashed(m) => m.get(&CellKey(k)).copied(),
+        }
+    }
+}
+
 /// Points bucketed by cell.
 #[derive(Debug)]
 pub(crate) struct CellGrid {
@@ -39,7 +79,7 @@ pub(crate) struct CellGrid {
     /// `1 / inv`, the cell side.
     side: f64,
     /// Cell -> `(start, len)` into `items`.
-    cells: CellMap,
+    cells: Cells,
     /// The occupied cells in lexicographic order: `(cell, start, len)` into `items`.
     runs: Vec<([i64; 3], u32, u32)>,
     /// Point ids sorted by cell, then by id.
@@ -70,10 +110,24 @@ impl CellGrid {
         let origin = pos
             .iter()
             .fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
+        let hi = pos
+            .iter()
+            .fold(DVec3::splat(f64::NEG_INFINITY), |a, &p| a.max(p));
         let inv = 1.0 / side;
         let cell: Vec<[i64; 3]> = pos.par_iter().map(|&p| cell_of(origin, inv, p)).collect();
-        let items = sorted_by_cell(&cell);
-        let mut cells = CellMap::default();
+        // Every point's cell is at most the top corner's (the truncation is monotone).
+        let span = ((hi - origin) * inv).floor() + 1.0;
+        let dense =
+            span.element_product() <= DENSE_CELLS_PER_POINT * pos.len() as f64 + DENSE_EXTRA;
+        let (items, cells) = if dense {
+            let top = cell_of(origin, inv, hi);
+            let dims = top.map(|t| t + 1);
+            let (items, start) = counting_sort(&cell, dims);
+            (items, Cells::Dense { dims, start })
+        } else {
+            (sorted_by_cell(&cell), Cells::Hashed(CellMap::default()))
+        };
+        let mut cells = cells;
         let mut runs = Vec::new();
         let mut i = 0;
         while i < items.len() {
@@ -82,7 +136,9 @@ impl CellGrid {
             while i < items.len() && cell[items[i] as usize] == k {
                 i += 1;
             }
-            cells.insert(CellKey(k), (start, i as u32 - start));
+            if let Cells::Hashed(m) = &mut cells {
+                m.insert(CellKey(k), (start, i as u32 - start));
+            }
             runs.push((k, start, i as u32 - start));
         }
         Self {
@@ -145,7 +201,7 @@ impl CellGrid {
                             c[1].saturating_add(d[1]),
                             c[2].saturating_add(d[2]),
                         ];
-                        let Some(&(s2, l2)) = self.cells.get(&CellKey(k)) else {
+                        let Some((s2, l2)) = self.cells.get(k) else {
                             continue;
                         };
                         let lo =
@@ -253,7 +309,7 @@ impl CellGrid {
                         c[1].saturating_add(dy),
                         c[2].saturating_add(dz),
                     ];
-                    if let Some(&(s, l)) = self.cells.get(&CellKey(k)) {
+                    if let Some((s, l)) = self.cells.get(k) {
                         let lo = self.origin
                             + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * self.side;
                         spans[n] = (s, l, lo);
@@ -320,6 +376,30 @@ fn sorted_by_cell(cell: &[[i64; 3]]) -> Vec<u32> {
     items
 }
 
+/// The indices `0..cell.len()` sorted by cell (lexicographically), then by index, and
+/// the start of each cell of the `dims` box in that order (`start[c]..start[c + 1]`,
+/// `c = (x * dims[1] + y) * dims[2] + z`): a counting sort over the dense array, the
+/// same order as [`sorted_by_cell`].
+fn counting_sort(cell: &[[i64; 3]], dims: [i64; 3]) -> (Vec<u32>, Vec<u32>) {
+    let lin = |k: [i64; 3]| ((k[0] * dims[1] + k[1]) * dims[2] + k[2]) as usize;
+    let n = (dims[0] * dims[1] * dims[2]) as usize;
+    let mut start = vec![0u32; n + 1];
+    for &k in cell {
+        start[lin(k) + 1] += 1;
+    }
+    for c in 0..n {
+        start[c + 1] += start[c];
+    }
+    let mut next = start.clone();
+    let mut items = vec![0u32; cell.len()];
+    for (i, &k) in cell.iter().enumerate() {
+        let c = lin(k);
+        items[next[c] as usize] = i as u32;
+        next[c] += 1;
+    }
+    (items, start)
+}
+
 /// Integer cell coordinates (the float-to-integer casts saturate, so absurd ratios of
 /// extent to cell side lump points together instead of failing; rows stay exact
 /// because every candidate is filtered by distance).
@@ -355,6 +435,12 @@ mod tests {
             let mut want: Vec<u32> = (0..cell.len() as u32).collect();
             want.sort_by_key(|&i| (cell[i as usize], i));
             assert_eq!(sorted_by_cell(&cell), want, "cells per axis {m}");
+            if m == 7 {
+                let (items, start) = counting_sort(&cell, [7, 7, 7]);
+                assert_eq!(items, want);
+                assert_eq!(start.len(), 7 * 7 * 7 + 1);
+                assert_eq!(start[7 * 7 * 7] as usize, cell.len());
+            }
         }
     }
 
@@ -407,13 +493,18 @@ mod tests {
             x ^= x << 17;
             (x >> 11) as f64 / (1u64 << 53) as f64
         };
-        // A thin slab (many empty neighbour cells) and a cube (full ones).
-        for zs in [0.1, 1.0] {
-            let pos: Vec<DVec3> = (0..3000)
+        // A thin slab (many empty neighbour cells) and a cube (full ones), on the dense
+        // array; the slab with a far point, on the hash map.
+        for (zs, far) in [(0.1, false), (1.0, false), (0.1, true)] {
+            let mut pos: Vec<DVec3> = (0..3000)
                 .map(|_| DVec3::new(r(), r(), r() * zs) * 3.0 - 1.0)
                 .collect();
-            let rad = 0.09;
+            if far {
+                pos.push(DVec3::splat(1e3));
+            }
+            let rad = 0.25;
             let g = CellGrid::new(&pos, rad);
+            assert_eq!(matches!(g.cells, Cells::Hashed(_)), far);
             let (start, idx) = g.all_rows(&pos, rad * rad);
             assert_eq!(start.len(), pos.len() + 1);
             assert_eq!(start[pos.len()] as usize, idx.len());
@@ -430,6 +521,14 @@ mod tests {
             }
             // Not only the points themselves.
             assert!(total > 3 * pos.len(), "{total}");
+            let mut brute = 0;
+            for p in &pos {
+                brute += pos
+                    .iter()
+                    .filter(|q| q.distance_squared(*p) <= rad * rad)
+                    .count();
+            }
+            assert_eq!(total, brute);
             // The grid moved to the cell order is the grid of the moved points.
             let moved: Vec<DVec3> = g.items().iter().map(|&i| pos[i as usize]).collect();
             let fresh = CellGrid::new(&moved, rad);
