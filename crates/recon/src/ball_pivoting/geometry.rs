@@ -55,6 +55,8 @@ pub(crate) fn ball_centres(a: DVec3, b: DVec3, c: DVec3, rho: f64) -> Option<(DV
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PivotFrame {
     pub m: DVec3,
+    /// The unit edge direction `a -> b`.
+    pub u: DVec3,
     pub e1: DVec3,
     pub e2: DVec3,
 }
@@ -71,6 +73,7 @@ impl PivotFrame {
         let e1 = (c - m).try_normalize()?;
         Some(Self {
             m,
+            u,
             e1,
             e2: u.cross(e1),
         })

@@ -1,6 +1,8 @@
-//! A hashed uniform grid of the points for one ball radius: cells of side `2ρ`, so every
-//! point within `2ρ` of a point lies in that point's cell or one of the 26 around it.
-//! It gives the neighbour rows of a pass without a tree walk or sorting the results.
+//! A uniform grid of the points for one ball radius: cells of side `2ρ`, so every point
+//! within `2ρ` of a point lies in that point's cell or one of the 26 around it. It gives
+//! the neighbour rows of a pass without a tree walk or sorting the results. The cells
+//! are a dense array over the points' box, or a hash map of the occupied ones when the
+//! box would need too many.
 
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};
@@ -31,6 +33,44 @@ impl Hash for CellKey {
 
 type CellMap = HashMap<CellKey, (u32, u32), foldhash::fast::FixedState>;
 
+/// A dense cell array is used while the points' box holds at most this many cells per
+/// point (plus [`DENSE_EXTRA`]); a sampled surface with cells of twice the ball
+/// radius has a few per point (the 100k torus: 3.7 in the first pass).
+const DENSE_CELLS_PER_POINT: f64 = 16.0;
+/// See [`DENSE_CELLS_PER_POINT`].
+const DENSE_EXTRA: f64 = 4096.0;
+
+/// Where each cell's points are in `items`.
+#[derive(Debug, PartialEq)]
+enum Cells {
+    /// IMPL-CHOICE: an array over the points' box, `(x * dims[1] + y) * dims[2] + z`
+    /// (lexicographic like the cell coordinates): cell `c` holds
+    /// `items[start[c]..start[c + 1]]`. A look-up is an index instead of a hash, and
+    /// the points are ordered by a counting sort. For the boxes that would need too
+    /// many cells (scattered or very elongated input) the hash map below.
+    Dense { dims: [i64; 3], start: Vec<u32> },
+    /// Occupied cell -> `(start, len)`.
+    Hashed(CellMap),
+}
+
+impl Cells {
+    /// `(start, len)` of the points of cell `k`, `None` when it has none.
+    #[inline]
+    fn get(&self, k: [i64; 3]) -> Option<(u32, u32)> {
+        match self {
+            Cells::Dense { dims, start } => {
+                if (0..3).any(|a| k[a] < 0 || k[a] >= dims[a]) {
+                    return None;
+                }
+                let c = ((k[0] * dims[1] + k[1]) * dims[2] + k[2]) as usize;
+                let (s, e) = (start[c], start[c + 1]);
+                (e > s).then_some((s, e - s))
+            }
+            Cells::Hashed(m) => m.get(&CellKey(k)).copied(),
+        }
+    }
+}
+
 /// Points bucketed by cell.
 #[derive(Debug)]
 pub(crate) struct CellGrid {
@@ -39,10 +79,30 @@ pub(crate) struct CellGrid {
     /// `1 / inv`, the cell side.
     side: f64,
     /// Cell -> `(start, len)` into `items`.
-    cells: CellMap,
+    cells: Cells,
+    /// The occupied cells in lexicographic order: `(cell, start, len)` into `items`.
+    runs: Vec<([i64; 3], u32, u32)>,
     /// Point ids sorted by cell, then by id.
     items: Vec<u32>,
 }
+
+/// The 13 neighbour offsets `(dx, dy, dz)` that come after `(0, 0, 0)` in `(dz, dy, dx)`
+/// order: with the cell itself, every unordered pair of neighbouring cells once.
+const FORWARD: [[i64; 3]; 13] = [
+    [1, 0, 0],
+    [-1, 1, 0],
+    [0, 1, 0],
+    [1, 1, 0],
+    [-1, -1, 1],
+    [0, -1, 1],
+    [1, -1, 1],
+    [-1, 0, 1],
+    [0, 0, 1],
+    [1, 0, 1],
+    [-1, 1, 1],
+    [0, 1, 1],
+    [1, 1, 1],
+];
 
 impl CellGrid {
     /// The grid of `pos` with cells of side `side` (finite, positive).
@@ -50,10 +110,25 @@ impl CellGrid {
         let origin = pos
             .iter()
             .fold(DVec3::splat(f64::INFINITY), |a, &p| a.min(p));
+        let hi = pos
+            .iter()
+            .fold(DVec3::splat(f64::NEG_INFINITY), |a, &p| a.max(p));
         let inv = 1.0 / side;
         let cell: Vec<[i64; 3]> = pos.par_iter().map(|&p| cell_of(origin, inv, p)).collect();
-        let items = sorted_by_cell(&cell);
-        let mut cells = CellMap::default();
+        // Every point's cell is at most the top corner's (the truncation is monotone).
+        let span = ((hi - origin) * inv).floor() + 1.0;
+        let dense =
+            span.element_product() <= DENSE_CELLS_PER_POINT * pos.len() as f64 + DENSE_EXTRA;
+        let (items, cells) = if dense {
+            let top = cell_of(origin, inv, hi);
+            let dims = top.map(|t| t + 1);
+            let (items, start) = counting_sort(&cell, dims);
+            (items, Cells::Dense { dims, start })
+        } else {
+            (sorted_by_cell(&cell), Cells::Hashed(CellMap::default()))
+        };
+        let mut cells = cells;
+        let mut runs = Vec::new();
         let mut i = 0;
         while i < items.len() {
             let k = cell[items[i] as usize];
@@ -61,15 +136,121 @@ impl CellGrid {
             while i < items.len() && cell[items[i] as usize] == k {
                 i += 1;
             }
-            cells.insert(CellKey(k), (start, i as u32 - start));
+            if let Cells::Hashed(m) = &mut cells {
+                m.insert(CellKey(k), (start, i as u32 - start));
+            }
+            runs.push((k, start, i as u32 - start));
         }
         Self {
             origin,
             inv,
             side: 1.0 / inv,
             cells,
+            runs,
             items,
         }
+    }
+
+    /// This grid for the points reordered by [`Self::items`] (`pos2[j] = pos[items[j]]`):
+    /// the same origin, cells and spans, and the items become `0..n` (the grid that
+    /// [`Self::new`] would build on `pos2` with the same side, without rebuilding it).
+    pub fn into_permuted(mut self) -> Self {
+        for (j, it) in self.items.iter_mut().enumerate() {
+            *it = j as u32;
+        }
+        self
+    }
+
+    /// Point ids sorted by cell, then by id.
+    pub fn items(&self) -> &[u32] {
+        &self.items
+    }
+
+    /// The rows (as [`Self::near_into`]: every point within `sqrt(r2)`, itself
+    /// included; `r2` at most the squared cell side) of all points of `pos` (the grid's
+    /// own points) as `(start, idx)`: point `i`'s row is `idx[start[i]..start[i + 1]]`,
+    /// in no particular order.
+    ///
+    /// IMPL-CHOICE: each unordered pair of points in neighbouring cells is tested once
+    /// (the cell itself and its 13 forward neighbours, [`FORWARD`]) and the hit goes
+    /// to both rows, half the distance tests of one query per point. The squared
+    /// distance is symmetric bit for bit (`p - q` is `-(q - p)` exactly) and the box
+    /// test only skips, so the rows are the same sets as [`Self::near_into`]'s.
+    pub fn all_rows(&self, pos: &[DVec3], r2: f64) -> (Vec<u32>, Vec<u32>) {
+        let n = pos.len();
+        let side = self.side;
+        let lim = r2 * (1.0 + 1e-9);
+        let pairs: Vec<Vec<(u32, u32)>> = self
+            .runs
+            .par_chunks(256)
+            .map(|runs| {
+                let mut out = Vec::new();
+                for &(c, s, l) in runs {
+                    let own = &self.items[s as usize..(s + l) as usize];
+                    for (x, &p) in own.iter().enumerate() {
+                        let pp = pos[p as usize];
+                        for &q in &own[x + 1..] {
+                            if pos[q as usize].distance_squared(pp) <= r2 {
+                                out.push((p, q));
+                            }
+                        }
+                    }
+                    for d in FORWARD {
+                        let k = [
+                            c[0].saturating_add(d[0]),
+                            c[1].saturating_add(d[1]),
+                            c[2].saturating_add(d[2]),
+                        ];
+                        let Some((s2, l2)) = self.cells.get(k) else {
+                            continue;
+                        };
+                        let lo =
+                            self.origin + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * side;
+                        let other = &self.items[s2 as usize..(s2 + l2) as usize];
+                        for &p in own {
+                            let pp = pos[p as usize];
+                            let gap = (lo - pp).max(pp - (lo + side)).max(DVec3::ZERO);
+                            // A margin of a few ulps: the box test only skips, never decides.
+                            if gap.length_squared() > lim {
+                                continue;
+                            }
+                            for &q in other {
+                                if pos[q as usize].distance_squared(pp) <= r2 {
+                                    out.push((p, q));
+                                }
+                            }
+                        }
+                    }
+                }
+                out
+            })
+            .collect();
+        // Each point's own entry plus its pairs, then the rows filled in place.
+        let mut start = vec![1u32; n + 1];
+        start[n] = 0;
+        for &(p, q) in pairs.iter().flatten() {
+            start[p as usize] += 1;
+            start[q as usize] += 1;
+        }
+        let mut acc = 0u32;
+        for v in start.iter_mut() {
+            let c = *v;
+            *v = acc;
+            acc += c;
+        }
+        let mut idx = vec![0u32; acc as usize];
+        let mut fill: Vec<u32> = start[..n].to_vec();
+        for (i, f) in fill.iter_mut().enumerate() {
+            idx[*f as usize] = i as u32;
+            *f += 1;
+        }
+        for &(p, q) in pairs.iter().flatten() {
+            idx[fill[p as usize] as usize] = q;
+            fill[p as usize] += 1;
+            idx[fill[q as usize] as usize] = p;
+            fill[q as usize] += 1;
+        }
+        (start, idx)
     }
 
     /// Appends to `out` every point of `pos` within distance `sqrt(r2)` of `p` (`r2` at
@@ -128,7 +309,7 @@ impl CellGrid {
                         c[1].saturating_add(dy),
                         c[2].saturating_add(dz),
                     ];
-                    if let Some(&(s, l)) = self.cells.get(&CellKey(k)) {
+                    if let Some((s, l)) = self.cells.get(k) {
                         let lo = self.origin
                             + DVec3::new(k[0] as f64, k[1] as f64, k[2] as f64) * self.side;
                         spans[n] = (s, l, lo);
@@ -195,11 +376,28 @@ fn sorted_by_cell(cell: &[[i64; 3]]) -> Vec<u32> {
     items
 }
 
-/// The indices of `pos` sorted by grid cell of side `side` (then by index): points
-/// close in space end up close in the order, which keeps the mesher's neighbour reads
-/// in cache.
-pub(crate) fn spatial_order(pos: &[DVec3], side: f64) -> Vec<u32> {
-    CellGrid::new(pos, side).items
+/// The indices `0..cell.len()` sorted by cell (lexicographically), then by index, and
+/// the start of each cell of the `dims` box in that order (`start[c]..start[c + 1]`,
+/// `c = (x * dims[1] + y) * dims[2] + z`): a counting sort over the dense array, the
+/// same order as [`sorted_by_cell`].
+fn counting_sort(cell: &[[i64; 3]], dims: [i64; 3]) -> (Vec<u32>, Vec<u32>) {
+    let lin = |k: [i64; 3]| ((k[0] * dims[1] + k[1]) * dims[2] + k[2]) as usize;
+    let n = (dims[0] * dims[1] * dims[2]) as usize;
+    let mut start = vec![0u32; n + 1];
+    for &k in cell {
+        start[lin(k) + 1] += 1;
+    }
+    for c in 0..n {
+        start[c + 1] += start[c];
+    }
+    let mut next = start.clone();
+    let mut items = vec![0u32; cell.len()];
+    for (i, &k) in cell.iter().enumerate() {
+        let c = lin(k);
+        items[next[c] as usize] = i as u32;
+        next[c] += 1;
+    }
+    (items, start)
 }
 
 /// Integer cell coordinates (the float-to-integer casts saturate, so absurd ratios of
@@ -237,6 +435,12 @@ mod tests {
             let mut want: Vec<u32> = (0..cell.len() as u32).collect();
             want.sort_by_key(|&i| (cell[i as usize], i));
             assert_eq!(sorted_by_cell(&cell), want, "cells per axis {m}");
+            if m == 7 {
+                let (items, start) = counting_sort(&cell, [7, 7, 7]);
+                assert_eq!(items, want);
+                assert_eq!(start.len(), 7 * 7 * 7 + 1);
+                assert_eq!(start[7 * 7 * 7] as usize, cell.len());
+            }
         }
     }
 
@@ -277,6 +481,63 @@ mod tests {
                 .filter(|&q| pos[q as usize].distance_squared(p) <= rad * rad)
                 .collect();
             assert_eq!(row, brute, "point {i}");
+        }
+    }
+
+    #[test]
+    fn all_rows_are_the_single_rows_and_the_permuted_grid_is_rebuilt_exactly() {
+        let mut x = 0x3c6e_f372_fe94_f82bu64;
+        let mut r = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        // A thin slab (many empty neighbour cells) and a cube (full ones), on the dense
+        // array; the slab with a far point, on the hash map.
+        for (zs, far) in [(0.1, false), (1.0, false), (0.1, true)] {
+            let mut pos: Vec<DVec3> = (0..3000)
+                .map(|_| DVec3::new(r(), r(), r() * zs) * 3.0 - 1.0)
+                .collect();
+            if far {
+                pos.push(DVec3::splat(1e3));
+            }
+            let rad = 0.25;
+            let g = CellGrid::new(&pos, rad);
+            assert_eq!(matches!(g.cells, Cells::Hashed(_)), far);
+            let (start, idx) = g.all_rows(&pos, rad * rad);
+            assert_eq!(start.len(), pos.len() + 1);
+            assert_eq!(start[pos.len()] as usize, idx.len());
+            let mut total = 0;
+            for (i, &p) in pos.iter().enumerate() {
+                let mut got = idx[start[i] as usize..start[i + 1] as usize].to_vec();
+                got.sort_unstable();
+                let mut want = Vec::new();
+                g.near_into(&pos, p, rad * rad, &mut want);
+                want.sort_unstable();
+                assert_eq!(got, want, "slab {zs} point {i}");
+                assert!(got.contains(&(i as u32)));
+                total += got.len();
+            }
+            // Not only the points themselves.
+            assert!(total > 3 * pos.len(), "{total}");
+            let mut brute = 0;
+            for p in &pos {
+                brute += pos
+                    .iter()
+                    .filter(|q| q.distance_squared(*p) <= rad * rad)
+                    .count();
+            }
+            assert_eq!(total, brute);
+            // The grid moved to the cell order is the grid of the moved points.
+            let moved: Vec<DVec3> = g.items().iter().map(|&i| pos[i as usize]).collect();
+            let fresh = CellGrid::new(&moved, rad);
+            let permuted = g.into_permuted();
+            assert_eq!(permuted.items, fresh.items);
+            assert_eq!(permuted.runs, fresh.runs);
+            assert_eq!(permuted.cells, fresh.cells);
+            assert_eq!(permuted.origin, fresh.origin);
+            assert_eq!(permuted.side.to_bits(), fresh.side.to_bits());
         }
     }
 }

@@ -8,15 +8,13 @@
 //! *inner* with two triangles. The front is a FIFO queue of edge ids, so a run is a pure
 //! function of the input order.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::VecDeque;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::geometry::{PivotFrame, ball_centre};
 use super::grid::CellGrid;
-
-type FastMap = HashMap<u64, u32, foldhash::fast::FixedState>;
 
 /// Edge status.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -84,7 +82,12 @@ pub(crate) struct Mesher<'a> {
     /// Per vertex: incident edges with exactly one triangle.
     open: Vec<u32>,
     edges: Vec<Edge>,
-    map: FastMap,
+    /// Per vertex: the first edge whose lower end point it is (`NONE`: none); the
+    /// others follow through `next_edge`. Replaces a hash map from the end points:
+    /// a vertex has a few edges, and its list is close in memory to its neighbours'.
+    first_edge: Vec<u32>,
+    /// Per edge: the next edge of its lower end point's list (`NONE` at the end).
+    next_edge: Vec<u32>,
     queue: VecDeque<u32>,
     /// Output triangles (counter-clockwise about the outward normal).
     pub tris: Vec<[u32; 3]>,
@@ -96,11 +99,8 @@ pub(crate) struct Mesher<'a> {
     cand: Vec<(f64, u32, u32, f64, f64)>,
 }
 
-#[inline]
-fn key(a: u32, b: u32) -> u64 {
-    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-    (u64::from(lo) << 32) | u64::from(hi)
-}
+/// End of an edge list.
+const NONE: u32 = u32::MAX;
 
 /// Tolerance of the emptiness test: a point counts as inside the ball when it is closer
 /// to the centre than `rho * (1 - EMPTY_TOL)`.
@@ -119,8 +119,6 @@ impl<'a> Mesher<'a> {
         for (i, &r) in rank.iter().enumerate() {
             by_rank[r as usize] = i as u32;
         }
-        let mut map = FastMap::default();
-        map.reserve(3 * n);
         Self {
             pos,
             nrm,
@@ -133,7 +131,8 @@ impl<'a> Mesher<'a> {
             used: vec![false; n],
             open: vec![0; n],
             edges: Vec::with_capacity(3 * n),
-            map,
+            first_edge: vec![NONE; n],
+            next_edge: Vec::with_capacity(3 * n),
             queue: VecDeque::new(),
             tris: Vec::with_capacity(2 * n),
             counts: Counts::default(),
@@ -143,17 +142,32 @@ impl<'a> Mesher<'a> {
     }
 
     /// Sets the ball radius of the next operations, buckets the points in a grid of
-    /// cells of side `2 rho` and computes, in parallel, the neighbour rows of `active`
-    /// (the points the pass starts from); other points get theirs when the front first
-    /// reaches them. Every ball of radius `rho` touching a point lies within `2 rho` of
-    /// it, so the row holds every candidate.
-    pub fn begin_pass(&mut self, rho: f64, active: &[u32]) {
+    /// cells of side `2 rho` (`grid` when given: it must be that grid of `pos`) and
+    /// computes, in parallel, the neighbour rows of `active` (the points the pass
+    /// starts from); other points get theirs when the front first reaches them. Every
+    /// ball of radius `rho` touching a point lies within `2 rho` of it, so the row holds
+    /// every candidate.
+    pub fn begin_pass(&mut self, rho: f64, active: &[u32], grid: Option<CellGrid>) {
         self.rho = rho;
         self.nb_row.fill(NO_ROW);
         self.nb_span.clear();
         self.nb_idx.clear();
-        let grid = CellGrid::new(self.pos, 2.0 * rho);
+        let grid = grid.unwrap_or_else(|| CellGrid::new(self.pos, 2.0 * rho));
         let (pos, r2) = (self.pos, 4.0 * rho * rho);
+        if active.len() == pos.len() {
+            // Every point (the first pass): each close pair is tested once for both
+            // rows. IMPL-CHOICE: only then; a later pass starts from about half the
+            // points (boundary edges' ends), where rows for all at the larger radius
+            // cost more than the active points' rows (measured on the 100k torus).
+            let (start, idx) = grid.all_rows(pos, r2);
+            self.nb_span = start.windows(2).map(|w| (w[0], w[1] - w[0])).collect();
+            for (i, r) in self.nb_row.iter_mut().enumerate() {
+                *r = i as u32;
+            }
+            self.nb_idx = idx;
+            self.grid = Some(grid);
+            return;
+        }
         // In cell order, so that neighbouring rows share their cells (cache and
         // look-ups); rows in chunks (one buffer per chunk, not per point), in order.
         let mut mark = vec![false; pos.len()];
@@ -203,8 +217,9 @@ impl<'a> Mesher<'a> {
             .push((start as u32, (self.nb_idx.len() - start) as u32));
     }
 
-    /// Neighbours of `i` within `2 * rho` (itself included), in grid order; `i`'s
-    /// row must have been computed ([`Self::ensure`]).
+    /// Neighbours of `i` within `2 * rho` (itself included), in no particular order
+    /// (every use is independent of it); `i`'s row must have been computed
+    /// ([`Self::ensure`]).
     #[inline]
     fn near(&self, i: u32) -> &[u32] {
         let r = self.nb_row[i as usize];
@@ -260,13 +275,28 @@ impl<'a> Mesher<'a> {
         !self.used[v as usize] || self.open[v as usize] > 0
     }
 
+    /// The edge between `a` and `b` (either direction), if any.
+    #[inline]
+    fn find_edge(&self, a: u32, b: u32) -> Option<u32> {
+        let (lo, hi) = (a.min(b), a.max(b));
+        let mut e = self.first_edge[lo as usize];
+        while e != NONE {
+            let ed = &self.edges[e as usize];
+            if ed.from.max(ed.to) == hi {
+                return Some(e);
+            }
+            e = self.next_edge[e as usize];
+        }
+        None
+    }
+
     /// Whether the directed edge `a -> b` can be added to a new triangle: absent, or
     /// present once in the opposite direction (then the triangle glues onto it).
     #[inline]
     fn edge_ok(&self, a: u32, b: u32) -> Option<bool> {
-        match self.map.get(&key(a, b)) {
+        match self.find_edge(a, b) {
             None => Some(false),
-            Some(&e) => {
+            Some(e) => {
                 let e = &self.edges[e as usize];
                 (e.state != EdgeState::Inner && e.from == b && e.to == a).then_some(true)
             }
@@ -281,8 +311,8 @@ impl<'a> Mesher<'a> {
         for k in 0..3 {
             let (a, b, o) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
             self.used[a as usize] = true;
-            match self.map.get(&key(a, b)) {
-                Some(&e) => {
+            match self.find_edge(a, b) {
+                Some(e) => {
                     self.edges[e as usize].state = EdgeState::Inner;
                     self.open[a as usize] -= 1;
                     self.open[b as usize] -= 1;
@@ -297,7 +327,9 @@ impl<'a> Mesher<'a> {
                         centre,
                         state: EdgeState::Front,
                     });
-                    self.map.insert(key(a, b), id);
+                    let lo = a.min(b) as usize;
+                    self.next_edge.push(self.first_edge[lo]);
+                    self.first_edge[lo] = id;
                     self.open[a as usize] += 1;
                     self.open[b as usize] += 1;
                     self.queue.push_back(id);
@@ -340,7 +372,7 @@ impl<'a> Mesher<'a> {
         self.ensure(a);
         let (pa, pb) = (self.pos[a as usize], self.pos[b as usize]);
         let frame = PivotFrame::new(pa, pb, e.centre)?;
-        let u = (pb - pa).normalize();
+        let u = frame.u;
         let w = {
             let po = self.pos[o as usize] - frame.m;
             po - u * po.dot(u)

@@ -129,8 +129,11 @@ impl BallPivoting {
         }
         // The mesher works on the points in grid-cell order (neighbours close in memory);
         // every decision that depends on the index order uses the working index
-        // (`perm`), so the mesh is the same as in input order.
-        let perm = grid::spatial_order(&prep.pos, 2.0 * radii[0]);
+        // (`perm`), so the mesh is the same as in input order. The grid of the first
+        // radius gives that order and, permuted, is the first pass's grid.
+        let grid0 = grid::CellGrid::new(&prep.pos, 2.0 * radii[0]);
+        let perm = grid0.items().to_vec();
+        let mut first_grid = Some(grid0.into_permuted());
         let pos: Vec<_> = perm.iter().map(|&i| prep.pos[i as usize]).collect();
         let nrm: Vec<_> = perm.iter().map(|&i| prep.nrm[i as usize]).collect();
         let mut m = Mesher::new(&pos, &nrm, &perm);
@@ -155,7 +158,7 @@ impl BallPivoting {
                 } else {
                     m.active_points()
                 };
-                m.begin_pass(rho, &active);
+                m.begin_pass(rho, &active, if r == 0 { first_grid.take() } else { None });
                 let before = m.tris.len();
                 if r > 0 {
                     m.reactivate();
