@@ -835,6 +835,30 @@ fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
     (a.min(b).min(c), a.max(b).max(c))
 }
 
+/// Bit of the vertex pair t[a] == o[b] (indices mod 3).
+const fn shared_bit(a: usize, b: usize) -> u16 {
+    1u16 << (3 * (a % 3) + b % 3)
+}
+
+/// `SHARED[k][j]`: the bits (3 k' + j', see [`overlaps_among`]) of the vertex pairs
+/// t[k'] == o[j'] that give t's edge k and o's edge j a common vertex.
+const SHARED: [[u16; 3]; 3] = {
+    let mut m = [[0u16; 3]; 3];
+    let mut k = 0;
+    while k < 3 {
+        let mut j = 0;
+        while j < 3 {
+            m[k][j] = shared_bit(k, j)
+                | shared_bit(k + 1, j)
+                | shared_bit(k, j + 1)
+                | shared_bit(k + 1, j + 1);
+            j += 1;
+        }
+        k += 1;
+    }
+    m
+};
+
 /// Whether triangle `t` overlaps a triangle of `mesh` at its vertices or at the points
 /// `near` (those whose centroid is within t's longest edge of t's plane): seen along t's
 /// normal, an edge of one crosses an edge of the other, or a vertex of one lies inside
@@ -842,7 +866,8 @@ fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
 ///
 /// Each triangle is tested once (it is reached from up to three of the points), and
 /// the 18 orientations a pair needs are computed once: the crossing tests and the
-/// inside tests use the same signs (the same expressions as `mesh::crosses`).
+/// inside tests use the same signs (the same expressions as `mesh::crosses`); which
+/// vertices the two share is found once, as bits.
 fn overlaps(mesh: &Mesh, seen: &mut Visit, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
     overlaps_among(mesh, seen, p, t, near, |_| true)
 }
@@ -866,8 +891,9 @@ fn overlaps_among(
     let reach = (0..3)
         .map(|k| (p[t[k] as usize] - p[t[(k + 1) % 3] as usize]).length())
         .fold(0.0, f64::max);
-    let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nu);
     let pt = t.map(|v| p[v as usize]);
+    // Edge vectors of t (as `orient(a, b, c) = (b - a).cross(c - a).dot(nu)` forms them).
+    let te = [pt[1] - pt[0], pt[2] - pt[1], pt[0] - pt[2]];
     // Only triangles whose box meets t's box grown by `reach` can overlap it.
     let (lo, hi) = bbox(p, t);
     let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
@@ -888,19 +914,26 @@ fn overlaps_among(
                 continue;
             }
             // d[k][j]: o[j] against t's edge k; e[j][k]: t[k] against o's edge j.
+            let oe = [po[1] - po[0], po[2] - po[1], po[0] - po[2]];
             let mut d = [[0.0; 3]; 3];
             let mut e = [[0.0; 3]; 3];
             for k in 0..3 {
                 for j in 0..3 {
-                    d[k][j] = orient(pt[k], pt[(k + 1) % 3], po[j]);
-                    e[j][k] = orient(po[j], po[(j + 1) % 3], pt[k]);
+                    d[k][j] = te[k].cross(po[j] - pt[k]).dot(nu);
+                    e[j][k] = oe[j].cross(pt[k] - po[j]).dot(nu);
+                }
+            }
+            // Bit 3 k + j: t[k] == o[j].
+            let mut eq = 0u16;
+            for k in 0..3 {
+                for j in 0..3 {
+                    eq |= u16::from(t[k] == o[j]) << (3 * k + j);
                 }
             }
             for k in 0..3 {
-                let (u, v) = (t[k], t[(k + 1) % 3]);
                 for j in 0..3 {
-                    let (r, s) = (o[j], o[(j + 1) % 3]);
-                    if r == u || r == v || s == u || s == v {
+                    // Edges with a common vertex are not tested.
+                    if eq & SHARED[k][j] != 0 {
                         continue;
                     }
                     // `crosses(nu, t[k], t[k + 1], o[j], o[j + 1])`.
@@ -915,12 +948,14 @@ fn overlaps_among(
                 (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
             };
             for j in 0..3 {
-                if !t.contains(&o[j]) && strictly_inside([d[0][j], d[1][j], d[2][j]]) {
+                // o[j] is not a vertex of t.
+                if eq & (0b001_001_001 << j) == 0 && strictly_inside([d[0][j], d[1][j], d[2][j]]) {
                     return true;
                 }
             }
             for k in 0..3 {
-                if !o.contains(&t[k]) && strictly_inside([e[0][k], e[1][k], e[2][k]]) {
+                // t[k] is not a vertex of o.
+                if eq & (0b111 << (3 * k)) == 0 && strictly_inside([e[0][k], e[1][k], e[2][k]]) {
                     return true;
                 }
             }

@@ -1,0 +1,115 @@
+//! A uniform grid of the sweep's boundary edges, for the winner fallback (the nearest
+//! boundary edge of a whole NC when none is at P's rho-neighbours).
+//!
+//! Every directed edge that became a boundary edge (the mesh's boundary log) is listed
+//! in every cell its bounding box meets; entries that stopped being boundary edges are
+//! dropped when a search meets them. A search visits the cells ring by ring around P's
+//! cell: after ring k, every edge not yet seen lies outside the block of cells within k
+//! of P's cell, so it is at least k cell sizes from P. Once the best distance found is
+//! below that bound (less a margin far above rounding), no unseen edge can be as near,
+//! so the result is the minimum over all of the NC's boundary edges, exactly as a full
+//! scan finds it. This holds for a true distance (`edge_distance = "segment"`); the
+//! paper's formula and `strict_rho` keep the full scan.
+
+use glam::DVec3;
+
+/// A boundary edge a -> b with its slot 3 t + k in the mesh.
+pub type Entry = (u32, u32, u32);
+
+/// The grid (cells of at least rho, at most `max_cells` of them).
+#[derive(Debug)]
+pub struct EdgeGrid {
+    origin: DVec3,
+    /// Cell size.
+    pub h: f64,
+    dims: [i64; 3],
+    /// Entries per cell, x fastest.
+    pub cells: Vec<Vec<Entry>>,
+    /// Log entries taken so far.
+    fed: usize,
+}
+
+impl EdgeGrid {
+    /// A grid over the bounding box of `p` with cells of size `rho`, made coarser until
+    /// there are at most `max_cells`.
+    pub fn new(p: &[DVec3], rho: f64, max_cells: usize) -> Self {
+        let lo = p.iter().copied().fold(DVec3::INFINITY, DVec3::min);
+        let hi = p.iter().copied().fold(DVec3::NEG_INFINITY, DVec3::max);
+        let ext = (hi - lo).max(DVec3::ZERO);
+        let mut h = rho;
+        let dims = loop {
+            let d = (ext / h).floor() + DVec3::ONE;
+            let count = d.x * d.y * d.z;
+            if count <= max_cells.max(1) as f64 {
+                break [d.x as i64, d.y as i64, d.z as i64];
+            }
+            h *= (count / max_cells.max(1) as f64).cbrt().max(1.01);
+        };
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        Self {
+            origin: lo,
+            h,
+            dims,
+            cells: vec![Vec::new(); n],
+            fed: 0,
+        }
+    }
+
+    /// Cell of a point, clamped to the grid.
+    #[inline]
+    pub fn cell(&self, x: DVec3) -> [i64; 3] {
+        let c = ((x - self.origin) / self.h).floor();
+        let clamp = |v: f64, d: i64| (v.max(0.0) as i64).min(d - 1);
+        [
+            clamp(c.x, self.dims[0]),
+            clamp(c.y, self.dims[1]),
+            clamp(c.z, self.dims[2]),
+        ]
+    }
+
+    #[inline]
+    fn index(&self, c: [i64; 3]) -> usize {
+        ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize
+    }
+
+    /// Lists the log entries not taken yet in the cells of their bounding boxes.
+    pub fn feed(&mut self, p: &[DVec3], log: &[Entry]) {
+        for &e in &log[self.fed..] {
+            let (pa, pb) = (p[e.0 as usize], p[e.1 as usize]);
+            let (lo, hi) = (self.cell(pa.min(pb)), self.cell(pa.max(pb)));
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        let i = self.index([x, y, z]);
+                        self.cells[i].push(e);
+                    }
+                }
+            }
+        }
+        self.fed = log.len();
+    }
+
+    /// Pushes to `out` the index of every cell at Chebyshev distance exactly `k` from
+    /// cell `c` (within the grid); returns whether the block within `k` of `c` covers
+    /// the whole grid.
+    pub fn ring(&self, c: [i64; 3], k: i64, out: &mut Vec<usize>) -> bool {
+        let lo = |a: usize| (c[a] - k).max(0);
+        let hi = |a: usize| (c[a] + k).min(self.dims[a] - 1);
+        for y in lo(1)..=hi(1) {
+            for x in lo(0)..=hi(0) {
+                if (x - c[0]).abs() == k || (y - c[1]).abs() == k {
+                    for z in lo(2)..=hi(2) {
+                        out.push(self.index([x, y, z]));
+                    }
+                } else {
+                    for z in [c[2] - k, c[2] + k] {
+                        if (0..self.dims[2]).contains(&z) {
+                            out.push(self.index([x, y, z]));
+                        }
+                    }
+                }
+            }
+        }
+        (0..3).all(|a| lo(a) == 0 && hi(a) == self.dims[a] - 1)
+    }
+}
