@@ -28,7 +28,9 @@ use std::collections::VecDeque;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::mesh::{Mesh, NONE, angle, circumradius, cross, min_angle, rotate_to};
+use super::mesh::{
+    AngleBound, Mesh, NONE, ONE_DEGREE, angle, circumradius, cross, min_angle, rotate_to,
+};
 
 /// Sweep triangles with an edge longer than this many rho are left out: they are the
 /// bridges of the winner fallback (the nearest boundary edge of the whole NC when none
@@ -754,9 +756,13 @@ fn unfold<'b>(
         debug_assert!(added.is_some(), "sweep triangle {t:?} re-added");
     }
     let mut keep = vec![true; tris.len()];
+    let fold_bound = AngleBound::new(theta);
     // Majority vote, repeated so that strips of folded triangles go too.
     for _ in 0..UNFOLD_PASSES {
+        // Each vote reads only the previous pass's `keep`: computed in parallel, the
+        // same set.
         let fold: Vec<usize> = (0..tris.len())
+            .into_par_iter()
             .filter(|&id| keep[id])
             .filter(|&id| {
                 let t = full.tris[id];
@@ -766,7 +772,7 @@ fn unfold<'b>(
                     if let Some(o) = full.across(id as u32, t[k], t[(k + 1) % 3])
                         && keep[o as usize]
                     {
-                        if angle(n, cross(p, full.tris[o as usize])) < theta {
+                        if !fold_bound.reached_by(n, cross(p, full.tris[o as usize])) {
                             agree += 1;
                         } else {
                             against += 1;
@@ -1038,20 +1044,21 @@ fn try_triangle<'b>(
     if !mesh.can_add(t) {
         return false;
     }
-    if min_angle(pa, pb, pc) <= 1f64.to_radians() {
+    if ONE_DEGREE.min_angle_at_most(pa, pb, pc) {
         return false;
     }
     if circumradius(pa, pb, pc) > o.max_radius {
         return false;
     }
     let n_t = cross(p, t);
-    if angle(n_t, n_w) >= o.theta {
+    let fold = AngleBound::new(o.theta);
+    if fold.reached_by(n_t, n_w) {
         return false;
     }
     // The fold test against every triangle the new one closes against.
     for (u, v) in [(a, c), (c, b)] {
         let [t0, _] = mesh.edge_tris(u, v);
-        if t0 != NONE && angle(n_t, cross(p, mesh.tris[t0 as usize])) >= o.theta {
+        if t0 != NONE && fold.reached_by(n_t, cross(p, mesh.tris[t0 as usize])) {
             return false;
         }
     }

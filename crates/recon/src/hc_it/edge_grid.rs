@@ -72,9 +72,14 @@ impl EdgeGrid {
         ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize
     }
 
-    /// Lists the log entries not taken yet in the cells of their bounding boxes.
-    pub fn feed(&mut self, p: &[DVec3], log: &[Entry]) {
+    /// Lists the log entries not taken yet that `current` accepts (those still boundary
+    /// edges: one that becomes a boundary edge again is logged again) in the cells of
+    /// their bounding boxes.
+    pub fn feed(&mut self, p: &[DVec3], log: &[Entry], current: impl Fn(&Entry) -> bool) {
         for &e in &log[self.fed..] {
+            if !current(&e) {
+                continue;
+            }
             let (pa, pb) = (p[e.0 as usize], p[e.1 as usize]);
             let (lo, hi) = (self.cell(pa.min(pb)), self.cell(pa.max(pb)));
             for z in lo[2]..=hi[2] {

@@ -8,7 +8,9 @@ use glam::DVec3;
 
 use super::cluster::UnionFind;
 use super::edge_grid::EdgeGrid;
-use super::mesh::{Mesh, NONE, angle, cross, crosses, min_angle, rotate_to};
+use super::mesh::{
+    AngleBound, MILLIRAD, Mesh, NONE, ONE_DEGREE, RIGHT, angle, cross, crosses, rotate_to,
+};
 use super::params::{ConflictRule, EdgeDistance, WinnerScan};
 
 /// A boundary edge a -> b with its triangle.
@@ -151,6 +153,8 @@ struct State<'a> {
     grid: Option<EdgeGrid>,
     /// Cell indices of one ring of the grid search.
     ring: Vec<usize>,
+    /// The theta threshold.
+    fold: AngleBound,
 }
 
 /// Runs HC-IT over `order` (the processing order of §3.1). `nbrs(i)` yields the
@@ -184,6 +188,7 @@ pub fn run<'b>(
         edge_gen: 1,
         grid: None,
         ring: Vec::new(),
+        fold: AngleBound::new(o.theta),
     };
     s.mesh.log_boundary();
     let mut groups: Vec<(u32, u32)> = Vec::new();
@@ -285,11 +290,15 @@ impl State<'_> {
         self.nc_boundary[root as usize] = list;
     }
 
-    /// Takes the boundary log's new entries into the per-NC lists.
+    /// Takes the boundary log's new entries into the per-NC lists, those that are still
+    /// boundary edges (one that becomes a boundary edge again is logged again).
     fn feed_nc_lists(&mut self) {
         let log_len = self.mesh.boundary_log().len();
         for k in self.logged..log_len {
             let e = self.mesh.boundary_log()[k];
+            if !self.mesh.is_boundary_slot(e.0, e.1, e.2) {
+                continue;
+            }
             let r = self.root_of(e.0);
             self.nc_boundary[r as usize].push(e);
         }
@@ -308,7 +317,10 @@ impl State<'_> {
             // At most 4 cells per point: the lists of empty cells cost 24 bytes each.
             EdgeGrid::new(self.p, self.o.rho, 4 * self.p.len() + 64)
         });
-        grid.feed(self.p, self.mesh.boundary_log());
+        let mesh = &self.mesh;
+        grid.feed(self.p, mesh.boundary_log(), |e| {
+            mesh.is_boundary_slot(e.0, e.1, e.2)
+        });
         self.edge_mark.resize(3 * self.mesh.tris.len(), 0);
         let gen_ = self.edge_gen;
         self.edge_gen += 1;
@@ -372,7 +384,7 @@ impl State<'_> {
     fn add(&mut self, t: [u32; 3], root: u32) -> Option<u32> {
         // Degenerate triangles (min angle below 1 degree) are refused like non-manifold
         // ones: their normal, which every test uses, is meaningless.
-        let ok = min_angle(self.pt(t[0]), self.pt(t[1]), self.pt(t[2])) > 1f64.to_radians();
+        let ok = !ONE_DEGREE.min_angle_at_most(self.pt(t[0]), self.pt(t[1]), self.pt(t[2]));
         match ok.then(|| self.mesh.add(t)).flatten() {
             Some(id) => {
                 self.nc_tris[root as usize] += 1;
@@ -408,8 +420,7 @@ impl State<'_> {
         let t_new = [i, y, x];
         let n_w = cross(self.p, w);
         let n_new = cross(self.p, t_new);
-        let theta = angle(n_new, n_w);
-        if theta < self.o.theta {
+        if !self.fold.reached_by(n_new, n_w) {
             self.create(i, root, t_new);
             return;
         }
@@ -454,8 +465,7 @@ impl State<'_> {
         let mut m = 0;
         for &v in lg {
             if self.root_of(v) == root {
-                if m == 1 && min_angle(self.pt(i), self.pt(mem[0]), self.pt(v)) <= 1f64.to_radians()
-                {
+                if m == 1 && ONE_DEGREE.min_angle_at_most(self.pt(i), self.pt(mem[0]), self.pt(v)) {
                     continue;
                 }
                 mem[m] = v;
@@ -605,7 +615,7 @@ impl State<'_> {
         let parts = [[i, b, c], [a, i, c], [a, b, i]];
         let deg = parts
             .iter()
-            .any(|t| min_angle(self.pt(t[0]), self.pt(t[1]), self.pt(t[2])) <= 1e-3);
+            .any(|t| MILLIRAD.min_angle_at_most(self.pt(t[0]), self.pt(t[1]), self.pt(t[2])));
         if deg {
             self.stats.refused += 1;
             return;
@@ -637,7 +647,7 @@ impl State<'_> {
             return false;
         }
         let nc = cross(self.p, cand);
-        if angle(n_new, nc) >= FRAC_PI_2 {
+        if RIGHT.reached_by(n_new, nc) {
             return false;
         }
         let (pa, pb) = (self.pt(a), self.pt(b));
@@ -774,10 +784,10 @@ impl State<'_> {
             let (n1, n2) = ([a, d, c], [d, b, c]);
             let c1 = cross(self.p, n1);
             let c2 = cross(self.p, n2);
-            if angle(c1, c2) >= FRAC_PI_2
-                || angle(c1, cross(self.p, r1)) >= FRAC_PI_2
-                || min_angle(self.pt(a), self.pt(d), self.pt(c)) <= 1e-3
-                || min_angle(self.pt(d), self.pt(b), self.pt(c)) <= 1e-3
+            if RIGHT.reached_by(c1, c2)
+                || RIGHT.reached_by(c1, cross(self.p, r1))
+                || MILLIRAD.min_angle_at_most(self.pt(a), self.pt(d), self.pt(c))
+                || MILLIRAD.min_angle_at_most(self.pt(d), self.pt(b), self.pt(c))
             {
                 continue;
             }

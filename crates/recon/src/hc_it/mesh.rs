@@ -36,6 +36,85 @@ pub fn angle(a: DVec3, b: DVec3) -> f64 {
     (a.dot(b) / d).clamp(-1.0, 1.0).acos()
 }
 
+/// An angle threshold with its cosine, for deciding `angle(a, b) >= rad` (and the like)
+/// without `acos` where the cosine decides it.
+///
+/// `acos` has a slope of magnitude at least 1 and is evaluated to about one ulp, and
+/// `cos` is the threshold's cosine to well within 1e-12: so when the cosine x that
+/// [`angle`] takes the arc cosine of is more than [`COS_MARGIN`] from `cos`, `acos(x)`
+/// is more than 1e-10 from `rad` on the side the comparison of x gives, and the answer
+/// is the one `angle` would give; otherwise `acos` is evaluated as `angle` does.
+#[derive(Debug, Clone, Copy)]
+pub struct AngleBound {
+    rad: f64,
+    cos: f64,
+}
+
+/// Cosines closer than this to a threshold's cosine are decided by `acos` itself.
+pub const COS_MARGIN: f64 = 1e-9;
+
+/// 1 degree (the smallest angle of an acceptable triangle).
+pub const ONE_DEGREE: AngleBound = AngleBound {
+    rad: 1f64.to_radians(),
+    cos: 0.999_847_695_156_391_2,
+};
+
+/// 1e-3 rad (the smallest angle of a split or flipped triangle).
+pub const MILLIRAD: AngleBound = AngleBound {
+    rad: 1e-3,
+    cos: 0.999_999_500_000_041_7,
+};
+
+/// pi / 2.
+pub const RIGHT: AngleBound = AngleBound {
+    rad: std::f64::consts::FRAC_PI_2,
+    cos: 0.0,
+};
+
+impl AngleBound {
+    /// The threshold `rad`.
+    pub fn new(rad: f64) -> Self {
+        Self {
+            rad,
+            cos: rad.cos(),
+        }
+    }
+
+    /// `angle(a, b)` against the threshold, as [`angle`] computes it.
+    #[inline]
+    fn cmp(&self, a: DVec3, b: DVec3) -> std::cmp::Ordering {
+        use std::cmp::Ordering;
+        let d = a.length() * b.length();
+        if d <= 0.0 {
+            return std::f64::consts::FRAC_PI_2
+                .partial_cmp(&self.rad)
+                .unwrap_or(Ordering::Less);
+        }
+        let x = (a.dot(b) / d).clamp(-1.0, 1.0);
+        if x < self.cos - COS_MARGIN {
+            Ordering::Greater
+        } else if x > self.cos + COS_MARGIN {
+            Ordering::Less
+        } else {
+            x.acos().partial_cmp(&self.rad).unwrap_or(Ordering::Less)
+        }
+    }
+
+    /// `angle(a, b) >= rad`.
+    #[inline]
+    pub fn reached_by(&self, a: DVec3, b: DVec3) -> bool {
+        self.cmp(a, b).is_ge()
+    }
+
+    /// `min_angle(a, b, c) <= rad`.
+    #[inline]
+    pub fn min_angle_at_most(&self, a: DVec3, b: DVec3, c: DVec3) -> bool {
+        self.cmp(b - a, c - a).is_le()
+            || self.cmp(c - b, a - b).is_le()
+            || self.cmp(a - c, b - c).is_le()
+    }
+}
+
 /// Smallest interior angle of a triangle (0 for a degenerate one).
 pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let ang = |p: DVec3, q: DVec3, r: DVec3| angle(q - p, r - p);
