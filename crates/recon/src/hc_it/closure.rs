@@ -106,7 +106,7 @@ pub struct ZipStats {
 /// Makes every vertex manifold: at a vertex with several fans (triangle groups around
 /// it connected through its edges), every fan but the largest loses its triangles at
 /// that vertex. Returns the rebuilt mesh and the triangles removed.
-fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
+fn cut_fans(mut mesh: Mesh, n: usize) -> (Mesh, usize) {
     let mut drop = vec![false; mesh.tris.len()];
     // (triangle, fan label, its two vertices other than v)
     let mut fan: Vec<(u32, u32, [u32; 2])> = Vec::new();
@@ -162,13 +162,16 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     }
     // A subset of an edge-manifold, consistently oriented mesh is one: every triangle
     // can be added again.
-    let mut out = Mesh::with_capacity(n, mesh.tris.len() - cut);
-    for (t, d) in mesh.tris.iter().zip(&drop) {
+    // Rebuilt in place (the state of a new mesh, without reallocating its lists).
+    let tris = std::mem::take(&mut mesh.tris);
+    mesh.clear();
+    mesh.tris.reserve(tris.len() - cut);
+    for (t, d) in tris.iter().zip(&drop) {
         if !d {
-            out.add_known(*t);
+            mesh.add_known(*t);
         }
     }
-    (out, cut)
+    (mesh, cut)
 }
 
 /// Longest new edge (in rho) of a triangle joining two fans: the two fans' edges at the
@@ -820,7 +823,9 @@ fn unfold<'b>(
             })
             .collect()
     };
-    let mut mesh = Mesh::with_capacity(p.len(), tris.len() + tris.len() / 2);
+    // The full mesh is not needed any more: its allocations are reused.
+    let mut mesh = full;
+    mesh.clear();
     let mut seen = Visit::default();
     let mut dropped = 0;
     for (i, t) in tris.into_iter().enumerate() {
@@ -972,10 +977,14 @@ fn overlaps_among(
 
 /// The directed boundary edges of `mesh`, in triangle order.
 fn boundary_edges(mesh: &Mesh) -> impl Iterator<Item = (u32, u32)> + '_ {
-    mesh.tris.iter().enumerate().flat_map(move |(id, t)| {
-        let bits = mesh.boundary_bits(id as u32);
-        (0..3).filter_map(move |k| (bits & (1 << k) != 0).then_some((t[k], t[(k + 1) % 3])))
-    })
+    mesh.tris
+        .iter()
+        .enumerate()
+        .filter(|&(id, _)| mesh.boundary_bits(id as u32) != 0)
+        .flat_map(move |(id, t)| {
+            let bits = mesh.boundary_bits(id as u32);
+            (0..3).filter_map(move |k| (bits & (1 << k) != 0).then_some((t[k], t[(k + 1) % 3])))
+        })
 }
 
 /// Candidates tried per boundary edge, in order of the angle they see it under.

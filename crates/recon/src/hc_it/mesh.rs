@@ -216,6 +216,26 @@ impl Mesh {
         m
     }
 
+    /// Empties the mesh: afterwards it is as [`Self::new`] made it (clock, stamps and all),
+    /// but keeps its allocations (a rebuild then reallocates no per-vertex list).
+    pub fn clear(&mut self) {
+        self.tris.clear();
+        self.edges.clear();
+        for l in &mut self.vt {
+            l.clear();
+        }
+        self.bmask.clear();
+        self.bout.fill(0);
+        self.bin.fill(0);
+        self.clock = 0;
+        self.stamp.fill(0);
+        self.journal.clear();
+        self.journaling = false;
+        self.saved_clock = 0;
+        self.log.clear();
+        self.logging = false;
+    }
+
     /// Starts logging the directed edges that become boundary edges (see
     /// [`Self::boundary_log`]).
     pub fn log_boundary(&mut self) {
