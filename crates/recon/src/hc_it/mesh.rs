@@ -123,6 +123,7 @@ pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 
 /// Whether the 2-D projection (plane normal `nrm`) of segment p-q crosses r-s in their
 /// interiors.
+#[inline]
 pub fn crosses(nrm: DVec3, p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool {
     let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nrm);
     let (d1, d2) = (orient(p, q, r), orient(p, q, s));
