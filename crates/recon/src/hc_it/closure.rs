@@ -267,6 +267,9 @@ fn join_at<'b>(
 /// seen from v (or u), is narrower than this. A round hole's rim turns by far more.
 const SLIT_ANGLE: f64 = 0.5;
 
+/// [`SLIT_ANGLE`] with its cosine (cos 0.5), for deciding the test on the cosine.
+const SLIT_BOUND: AngleBound = AngleBound::with_cos(SLIT_ANGLE, 0.877_582_561_890_372_8);
+
 /// Closes slits: gaps between a boundary edge u -> v of triangle T = (u, v, d) and the
 /// boundary vertex y next to it along the boundary (edge v -> y, or y -> u) where y lies
 /// in the gap close to segment u-v (angle u-v-y, or v-u-y, under [`SLIT_ANGLE`], y's
@@ -329,7 +332,7 @@ fn try_split(
     let other = if at == v { pu } else { pv };
     let pa = p[at as usize];
     let (e, f) = (other - pa, py - pa);
-    if angle(e, f) >= SLIT_ANGLE || f.length_squared() >= e.length_squared() {
+    if SLIT_BOUND.reached_by(e, f) || f.length_squared() >= e.length_squared() {
         return None;
     }
     // y on the gap's side of u-v, or on the line up to a twentieth of |u-v| (curved

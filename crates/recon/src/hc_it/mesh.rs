@@ -80,6 +80,12 @@ impl AngleBound {
         }
     }
 
+    /// The threshold `rad` with its cosine given (for constants; it must be within
+    /// 1e-12 of cos(rad)).
+    pub const fn with_cos(rad: f64, cos: f64) -> Self {
+        Self { rad, cos }
+    }
+
     /// `angle(a, b)` against the threshold, as [`angle`] computes it.
     #[inline]
     fn cmp(&self, a: DVec3, b: DVec3) -> std::cmp::Ordering {
