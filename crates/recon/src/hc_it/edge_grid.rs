@@ -118,3 +118,59 @@ impl EdgeGrid {
         (0..3).all(|a| lo(a) == 0 && hi(a) == self.dims[a] - 1)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rings_cover_every_cell_once_and_end_at_the_whole_grid() {
+        // A 5 x 3 x 4 grid (cells of 1 over a box of 4.5 x 2.5 x 3.5).
+        let p = [DVec3::ZERO, DVec3::new(4.5, 2.5, 3.5)];
+        let g = EdgeGrid::new(&p, 1.0, 1000);
+        assert_eq!(g.dims, [5, 3, 4]);
+        for c in [[0, 0, 0], [2, 1, 2], [4, 2, 3], [1, 2, 0]] {
+            let mut seen = vec![0u32; g.cells.len()];
+            let mut ring = Vec::new();
+            let mut k = 0;
+            loop {
+                ring.clear();
+                let all = g.ring(c, k, &mut ring);
+                for &i in &ring {
+                    seen[i] += 1;
+                    // Cell i is at Chebyshev distance k from c.
+                    let (x, y, z) = (i as i64 % 5, i as i64 / 5 % 3, i as i64 / 15);
+                    let d = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
+                    assert_eq!(d, k);
+                }
+                if all {
+                    break;
+                }
+                k += 1;
+                assert!(k < 10, "rings never cover the grid");
+            }
+            assert!(seen.iter().all(|&s| s == 1), "from {c:?}: {seen:?}");
+        }
+    }
+
+    #[test]
+    fn edges_are_listed_in_every_cell_their_box_meets_and_grids_stay_small() {
+        let p = [
+            DVec3::ZERO,
+            DVec3::new(4.5, 2.5, 3.5),
+            DVec3::new(0.5, 0.5, 0.5),
+            DVec3::new(2.5, 1.5, 0.5),
+        ];
+        let mut g = EdgeGrid::new(&p, 1.0, 1000);
+        g.feed(&p, &[(2, 3, 0), (3, 2, 1)], |e| e.2 == 0);
+        let listed: Vec<usize> = (0..g.cells.len())
+            .filter(|&i| !g.cells[i].is_empty())
+            .collect();
+        // Cells x 0..=2, y 0..=1, z 0 (the second entry is not current).
+        assert_eq!(listed, vec![0, 1, 2, 5, 6, 7]);
+        assert!(g.cells.iter().flatten().all(|e| e.2 == 0));
+        // A cap on the cell count makes the cells larger.
+        let small = EdgeGrid::new(&p, 0.01, 64);
+        assert!(small.cells.len() <= 64 && small.h > 0.01);
+    }
+}

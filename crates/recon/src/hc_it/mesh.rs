@@ -519,3 +519,50 @@ impl Mesh {
         self.link(b, tb);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cosine decisions agree with comparing [`angle`] and [`min_angle`], also for
+    /// angles within rounding of the thresholds.
+    #[test]
+    fn angle_bounds_decide_as_the_angles_do() {
+        let bounds = [
+            ONE_DEGREE,
+            MILLIRAD,
+            RIGHT,
+            AngleBound::new(1.0),
+            AngleBound::new(std::f64::consts::FRAC_PI_3),
+        ];
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for b in bounds {
+            for i in 0..20_000 {
+                let a = DVec3::new(1.0, 0.0, 0.0);
+                // Angles spread over [0, pi], every other one next to the threshold.
+                let t = if i % 2 == 0 {
+                    next() * std::f64::consts::PI
+                } else {
+                    (b.rad + (next() - 0.5) * 1e-8).max(0.0)
+                };
+                let v = DVec3::new(t.cos(), t.sin() * next(), t.sin()) * (0.5 + next());
+                assert_eq!(b.reached_by(a, v), angle(a, v) >= b.rad, "{t}");
+                let c = DVec3::new(next(), next(), 0.0);
+                assert_eq!(
+                    b.min_angle_at_most(DVec3::ZERO, v, c),
+                    min_angle(DVec3::ZERO, v, c) <= b.rad
+                );
+            }
+            assert_eq!(
+                b.reached_by(DVec3::ZERO, DVec3::X),
+                angle(DVec3::ZERO, DVec3::X) >= b.rad
+            );
+        }
+    }
+}
