@@ -8,64 +8,18 @@
 //! `RAYON_NUM_THREADS=2 cargo bench -p reconbench-recon --bench hc_it`. Figures are in
 //! docs/methods/hc_it.md.
 
-use std::f64::consts::PI;
-
 use criterion::{Criterion, criterion_group, criterion_main};
-use glam::DVec3;
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Reconstructor, RunCtx};
 use reconbench_recon::hc_it::Closure;
 use reconbench_recon::{HcIt, HcItParams};
-use reconbench_synth::{DatasetSpec, Density};
+use reconbench_testkit::hc_it_inputs::{golden_spiral_sphere, noisy_height_field, wavy_sheet};
 
 fn size() -> usize {
     std::env::var("RECON_BENCH_POINTS")
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(100_000)
-}
-
-/// A jittered m x m grid over [0, 1]^2 lifted by a wavy height.
-fn sheet(n: usize) -> Vec<DVec3> {
-    let m = (n as f64).sqrt().round() as usize;
-    let mut out = Vec::with_capacity(m * m);
-    for i in 0..m {
-        for j in 0..m {
-            let jx = ((i * 7 + j * 13) as f64 * 0.618_034).fract() - 0.5;
-            let jy = ((i * 11 + j * 5) as f64 * 0.414_214).fract() - 0.5;
-            let x = (i as f64 + 0.5 + 0.3 * jx) / m as f64;
-            let y = (j as f64 + 0.5 + 0.3 * jy) / m as f64;
-            out.push(DVec3::new(x, y, 0.1 * (3.0 * x).sin() * y));
-        }
-    }
-    out
-}
-
-/// Golden-spiral samples of the unit sphere.
-fn sphere(n: usize) -> Vec<DVec3> {
-    let ga = PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - z * z).sqrt();
-            let phi = ga * i as f64;
-            DVec3::new(s * phi.cos(), s * phi.sin(), z)
-        })
-        .collect()
-}
-
-/// The CLI's `height-field` grid with `ma-uniform:level=0.3` noise, seed 1.
-fn noisy_height_field(n: usize) -> Vec<DVec3> {
-    let spec = DatasetSpec {
-        shape: "height-field".parse().expect("shape"),
-        sampler: "grid".parse().expect("sampler"),
-        density: Density::Count(n),
-        perturbations: vec!["ma-uniform:level=0.3".parse().expect("noise")],
-        scan: None,
-    };
-    reconbench_synth::generate(&spec, 1)
-        .expect("height field")
-        .positions
 }
 
 fn bench(c: &mut Criterion) {
@@ -80,8 +34,8 @@ fn bench(c: &mut Criterion) {
     };
     let hf = noisy_height_field(n);
     for (name, pts, m) in [
-        ("sheet", sheet(n), HcIt::default()),
-        ("sphere", sphere(n), HcIt::default()),
+        ("sheet", wavy_sheet(n), HcIt::default()),
+        ("sphere", golden_spiral_sphere(n), HcIt::default()),
         ("noisy_height_field", hf.clone(), HcIt::default()),
         ("noisy_height_field_literal", hf, literal),
     ] {

@@ -13,34 +13,11 @@ use reconbench_recon::hc_it::cluster::UnionFind;
 use reconbench_recon::hc_it::{
     Closure, ConflictRule, EdgeDistance, HcIt, HcItParams, WinnerScan, sweep_order,
 };
-
-/// A jittered grid (deterministic, irrational offsets) over `[0, 1]^2` lifted by `f`.
-fn sheet(m: usize, f: impl Fn(f64, f64) -> f64) -> Vec<DVec3> {
-    let mut out = Vec::with_capacity(m * m);
-    for i in 0..m {
-        for j in 0..m {
-            let jx = ((i * 7 + j * 13) as f64 * 0.618_034).fract() - 0.5;
-            let jy = ((i * 11 + j * 5) as f64 * 0.414_214).fract() - 0.5;
-            let x = (i as f64 + 0.5 + 0.3 * jx) / m as f64;
-            let y = (j as f64 + 0.5 + 0.3 * jy) / m as f64;
-            out.push(DVec3::new(x, y, f(x, y)));
-        }
-    }
-    out
-}
-
-/// Golden-spiral samples of the unit sphere.
-fn sphere(n: usize) -> Vec<DVec3> {
-    let ga = PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
-            let s = (1.0 - z * z).sqrt();
-            let phi = ga * i as f64;
-            DVec3::new(s * phi.cos(), s * phi.sin(), z)
-        })
-        .collect()
-}
+// The golden hashes below refer to these exact points (shared with the bench and
+// `hcit_run`).
+use reconbench_testkit::hc_it_inputs::{
+    golden_spiral_sphere as sphere, jittered_sheet as sheet, wavy,
+};
 
 fn run(p: &[DVec3], params: HcItParams) -> Reconstruction {
     let m = HcIt::from_params(params).unwrap();
@@ -60,10 +37,6 @@ fn with_rho(rho: f64) -> HcItParams {
         rho,
         ..Default::default()
     }
-}
-
-fn wavy(x: f64, y: f64) -> f64 {
-    0.1 * (3.0 * x).sin() * y
 }
 
 #[test]

@@ -7,9 +7,12 @@
 //! * [`metric_fixtures`]: an analytic sphere `Shape`, mesh edits, brute-force distance.
 //! * [`feature_fixtures`]: clouds with exact feature ground truth, labelling scores.
 //! * [`box_edges`]: the box sampled with its edges, and edge-preservation measures.
+//! * [`hc_it_inputs`]: the sheets, sphere and noisy height field of the `hc-it` tests,
+//!   bench and probe.
 
 pub mod box_edges;
 pub mod feature_fixtures;
+pub mod hc_it_inputs;
 pub mod meshes;
 pub mod metric_fixtures;
 pub mod points;

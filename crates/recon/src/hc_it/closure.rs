@@ -28,7 +28,9 @@ use std::collections::VecDeque;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::mesh::{Mesh, NONE, angle, circumradius, cross, min_angle, rotate_to};
+use super::mesh::{
+    AngleBound, Mesh, NONE, ONE_DEGREE, angle, circumradius, cross, min_angle, rotate_to,
+};
 
 /// Sweep triangles with an edge longer than this many rho are left out: they are the
 /// bridges of the winner fallback (the nearest boundary edge of the whole NC when none
@@ -104,7 +106,7 @@ pub struct ZipStats {
 /// Makes every vertex manifold: at a vertex with several fans (triangle groups around
 /// it connected through its edges), every fan but the largest loses its triangles at
 /// that vertex. Returns the rebuilt mesh and the triangles removed.
-fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
+fn cut_fans(mut mesh: Mesh, n: usize) -> (Mesh, usize) {
     let mut drop = vec![false; mesh.tris.len()];
     // (triangle, fan label, its two vertices other than v)
     let mut fan: Vec<(u32, u32, [u32; 2])> = Vec::new();
@@ -160,13 +162,16 @@ fn cut_fans(mesh: Mesh, n: usize) -> (Mesh, usize) {
     }
     // A subset of an edge-manifold, consistently oriented mesh is one: every triangle
     // can be added again.
-    let mut out = Mesh::with_capacity(n, mesh.tris.len() - cut);
-    for (t, d) in mesh.tris.iter().zip(&drop) {
+    // Rebuilt in place (the state of a new mesh, without reallocating its lists).
+    let tris = std::mem::take(&mut mesh.tris);
+    mesh.clear();
+    mesh.tris.reserve(tris.len() - cut);
+    for (t, d) in tris.iter().zip(&drop) {
         if !d {
-            out.add_known(*t);
+            mesh.add_known(*t);
         }
     }
-    (out, cut)
+    (mesh, cut)
 }
 
 /// Longest new edge (in rho) of a triangle joining two fans: the two fans' edges at the
@@ -262,6 +267,9 @@ fn join_at<'b>(
 /// seen from v (or u), is narrower than this. A round hole's rim turns by far more.
 const SLIT_ANGLE: f64 = 0.5;
 
+/// [`SLIT_ANGLE`] with its cosine (cos 0.5), for deciding the test on the cosine.
+const SLIT_BOUND: AngleBound = AngleBound::with_cos(SLIT_ANGLE, 0.877_582_561_890_372_8);
+
 /// Closes slits: gaps between a boundary edge u -> v of triangle T = (u, v, d) and the
 /// boundary vertex y next to it along the boundary (edge v -> y, or y -> u) where y lies
 /// in the gap close to segment u-v (angle u-v-y, or v-u-y, under [`SLIT_ANGLE`], y's
@@ -324,7 +332,7 @@ fn try_split(
     let other = if at == v { pu } else { pv };
     let pa = p[at as usize];
     let (e, f) = (other - pa, py - pa);
-    if angle(e, f) >= SLIT_ANGLE || f.length_squared() >= e.length_squared() {
+    if SLIT_BOUND.reached_by(e, f) || f.length_squared() >= e.length_squared() {
         return None;
     }
     // y on the gap's side of u-v, or on the line up to a twentieth of |u-v| (curved
@@ -754,9 +762,13 @@ fn unfold<'b>(
         debug_assert!(added.is_some(), "sweep triangle {t:?} re-added");
     }
     let mut keep = vec![true; tris.len()];
+    let fold_bound = AngleBound::new(theta);
     // Majority vote, repeated so that strips of folded triangles go too.
     for _ in 0..UNFOLD_PASSES {
+        // Each vote reads only the previous pass's `keep`: computed in parallel, the
+        // same set.
         let fold: Vec<usize> = (0..tris.len())
+            .into_par_iter()
             .filter(|&id| keep[id])
             .filter(|&id| {
                 let t = full.tris[id];
@@ -766,7 +778,7 @@ fn unfold<'b>(
                     if let Some(o) = full.across(id as u32, t[k], t[(k + 1) % 3])
                         && keep[o as usize]
                     {
-                        if angle(n, cross(p, full.tris[o as usize])) < theta {
+                        if !fold_bound.reached_by(n, cross(p, full.tris[o as usize])) {
                             agree += 1;
                         } else {
                             against += 1;
@@ -814,7 +826,9 @@ fn unfold<'b>(
             })
             .collect()
     };
-    let mut mesh = Mesh::with_capacity(p.len(), tris.len() + tris.len() / 2);
+    // The full mesh is not needed any more: its allocations are reused.
+    let mut mesh = full;
+    mesh.clear();
     let mut seen = Visit::default();
     let mut dropped = 0;
     for (i, t) in tris.into_iter().enumerate() {
@@ -835,6 +849,30 @@ fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
     (a.min(b).min(c), a.max(b).max(c))
 }
 
+/// Bit of the vertex pair t[a] == o[b] (indices mod 3).
+const fn shared_bit(a: usize, b: usize) -> u16 {
+    1u16 << (3 * (a % 3) + b % 3)
+}
+
+/// `SHARED[k][j]`: the bits (3 k' + j', see [`overlaps_among`]) of the vertex pairs
+/// t[k'] == o[j'] that give t's edge k and o's edge j a common vertex.
+const SHARED: [[u16; 3]; 3] = {
+    let mut m = [[0u16; 3]; 3];
+    let mut k = 0;
+    while k < 3 {
+        let mut j = 0;
+        while j < 3 {
+            m[k][j] = shared_bit(k, j)
+                | shared_bit(k + 1, j)
+                | shared_bit(k, j + 1)
+                | shared_bit(k + 1, j + 1);
+            j += 1;
+        }
+        k += 1;
+    }
+    m
+};
+
 /// Whether triangle `t` overlaps a triangle of `mesh` at its vertices or at the points
 /// `near` (those whose centroid is within t's longest edge of t's plane): seen along t's
 /// normal, an edge of one crosses an edge of the other, or a vertex of one lies inside
@@ -842,7 +880,8 @@ fn bbox(p: &[DVec3], t: [u32; 3]) -> (DVec3, DVec3) {
 ///
 /// Each triangle is tested once (it is reached from up to three of the points), and
 /// the 18 orientations a pair needs are computed once: the crossing tests and the
-/// inside tests use the same signs (the same expressions as `mesh::crosses`).
+/// inside tests use the same signs (the same expressions as `mesh::crosses`); which
+/// vertices the two share is found once, as bits.
 fn overlaps(mesh: &Mesh, seen: &mut Visit, p: &[DVec3], t: [u32; 3], near: &[u32]) -> bool {
     overlaps_among(mesh, seen, p, t, near, |_| true)
 }
@@ -866,8 +905,9 @@ fn overlaps_among(
     let reach = (0..3)
         .map(|k| (p[t[k] as usize] - p[t[(k + 1) % 3] as usize]).length())
         .fold(0.0, f64::max);
-    let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nu);
     let pt = t.map(|v| p[v as usize]);
+    // Edge vectors of t (as `orient(a, b, c) = (b - a).cross(c - a).dot(nu)` forms them).
+    let te = [pt[1] - pt[0], pt[2] - pt[1], pt[0] - pt[2]];
     // Only triangles whose box meets t's box grown by `reach` can overlap it.
     let (lo, hi) = bbox(p, t);
     let (lo, hi) = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
@@ -888,19 +928,26 @@ fn overlaps_among(
                 continue;
             }
             // d[k][j]: o[j] against t's edge k; e[j][k]: t[k] against o's edge j.
+            let oe = [po[1] - po[0], po[2] - po[1], po[0] - po[2]];
             let mut d = [[0.0; 3]; 3];
             let mut e = [[0.0; 3]; 3];
             for k in 0..3 {
                 for j in 0..3 {
-                    d[k][j] = orient(pt[k], pt[(k + 1) % 3], po[j]);
-                    e[j][k] = orient(po[j], po[(j + 1) % 3], pt[k]);
+                    d[k][j] = te[k].cross(po[j] - pt[k]).dot(nu);
+                    e[j][k] = oe[j].cross(pt[k] - po[j]).dot(nu);
+                }
+            }
+            // Bit 3 k + j: t[k] == o[j].
+            let mut eq = 0u16;
+            for k in 0..3 {
+                for j in 0..3 {
+                    eq |= u16::from(t[k] == o[j]) << (3 * k + j);
                 }
             }
             for k in 0..3 {
-                let (u, v) = (t[k], t[(k + 1) % 3]);
                 for j in 0..3 {
-                    let (r, s) = (o[j], o[(j + 1) % 3]);
-                    if r == u || r == v || s == u || s == v {
+                    // Edges with a common vertex are not tested.
+                    if eq & SHARED[k][j] != 0 {
                         continue;
                     }
                     // `crosses(nu, t[k], t[k + 1], o[j], o[j + 1])`.
@@ -915,12 +962,14 @@ fn overlaps_among(
                 (s[0] > 0.0 && s[1] > 0.0 && s[2] > 0.0) || (s[0] < 0.0 && s[1] < 0.0 && s[2] < 0.0)
             };
             for j in 0..3 {
-                if !t.contains(&o[j]) && strictly_inside([d[0][j], d[1][j], d[2][j]]) {
+                // o[j] is not a vertex of t.
+                if eq & (0b001_001_001 << j) == 0 && strictly_inside([d[0][j], d[1][j], d[2][j]]) {
                     return true;
                 }
             }
             for k in 0..3 {
-                if !o.contains(&t[k]) && strictly_inside([e[0][k], e[1][k], e[2][k]]) {
+                // t[k] is not a vertex of o.
+                if eq & (0b111 << (3 * k)) == 0 && strictly_inside([e[0][k], e[1][k], e[2][k]]) {
                     return true;
                 }
             }
@@ -931,10 +980,14 @@ fn overlaps_among(
 
 /// The directed boundary edges of `mesh`, in triangle order.
 fn boundary_edges(mesh: &Mesh) -> impl Iterator<Item = (u32, u32)> + '_ {
-    mesh.tris.iter().enumerate().flat_map(move |(id, t)| {
-        let bits = mesh.boundary_bits(id as u32);
-        (0..3).filter_map(move |k| (bits & (1 << k) != 0).then_some((t[k], t[(k + 1) % 3])))
-    })
+    mesh.tris
+        .iter()
+        .enumerate()
+        .filter(|&(id, _)| mesh.boundary_bits(id as u32) != 0)
+        .flat_map(move |(id, t)| {
+            let bits = mesh.boundary_bits(id as u32);
+            (0..3).filter_map(move |k| (bits & (1 << k) != 0).then_some((t[k], t[(k + 1) % 3])))
+        })
 }
 
 /// Candidates tried per boundary edge, in order of the angle they see it under.
@@ -1003,20 +1056,21 @@ fn try_triangle<'b>(
     if !mesh.can_add(t) {
         return false;
     }
-    if min_angle(pa, pb, pc) <= 1f64.to_radians() {
+    if ONE_DEGREE.min_angle_at_most(pa, pb, pc) {
         return false;
     }
     if circumradius(pa, pb, pc) > o.max_radius {
         return false;
     }
     let n_t = cross(p, t);
-    if angle(n_t, n_w) >= o.theta {
+    let fold = AngleBound::new(o.theta);
+    if fold.reached_by(n_t, n_w) {
         return false;
     }
     // The fold test against every triangle the new one closes against.
     for (u, v) in [(a, c), (c, b)] {
         let [t0, _] = mesh.edge_tris(u, v);
-        if t0 != NONE && angle(n_t, cross(p, mesh.tris[t0 as usize])) >= o.theta {
+        if t0 != NONE && fold.reached_by(n_t, cross(p, mesh.tris[t0 as usize])) {
             return false;
         }
     }

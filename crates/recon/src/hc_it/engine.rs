@@ -7,7 +7,10 @@ use std::f64::consts::FRAC_PI_2;
 use glam::DVec3;
 
 use super::cluster::UnionFind;
-use super::mesh::{Mesh, NONE, angle, cross, crosses, min_angle, rotate_to};
+use super::edge_grid::EdgeGrid;
+use super::mesh::{
+    AngleBound, MILLIRAD, Mesh, NONE, ONE_DEGREE, RIGHT, angle, cross, crosses, rotate_to,
+};
 use super::params::{ConflictRule, EdgeDistance, WinnerScan};
 
 /// A boundary edge a -> b with its triangle.
@@ -146,6 +149,12 @@ struct State<'a> {
     /// Per triangle slot (3 t + k): the scan (`edge_gen`) that last saw it.
     edge_mark: Vec<u32>,
     edge_gen: u32,
+    /// Boundary edges by place, for the fallback search (made at its first use).
+    grid: Option<EdgeGrid>,
+    /// Cell indices of one ring of the grid search.
+    ring: Vec<usize>,
+    /// The theta threshold.
+    fold: AngleBound,
 }
 
 /// Runs HC-IT over `order` (the processing order of §3.1). `nbrs(i)` yields the
@@ -177,6 +186,9 @@ pub fn run<'b>(
         logged: 0,
         edge_mark: Vec::new(),
         edge_gen: 1,
+        grid: None,
+        ring: Vec::new(),
+        fold: AngleBound::new(o.theta),
     };
     s.mesh.log_boundary();
     let mut groups: Vec<(u32, u32)> = Vec::new();
@@ -252,13 +264,7 @@ impl State<'_> {
     /// particular order (the winner is the minimum of a total order, so the order does
     /// not matter).
     fn nc_boundary_edges(&mut self, root: u32, out: &mut Vec<BEdge>) {
-        let log_len = self.mesh.boundary_log().len();
-        for k in self.logged..log_len {
-            let e = self.mesh.boundary_log()[k];
-            let r = self.root_of(e.0);
-            self.nc_boundary[r as usize].push(e);
-        }
-        self.logged = log_len;
+        self.feed_nc_lists();
         let mut list = std::mem::take(&mut self.nc_boundary[root as usize]);
         // Keep each current boundary edge once: an entry is current when its slot still
         // holds the edge as a boundary edge (every slot that became one was logged, so
@@ -284,6 +290,89 @@ impl State<'_> {
         self.nc_boundary[root as usize] = list;
     }
 
+    /// Takes the boundary log's new entries into the per-NC lists, those that are still
+    /// boundary edges (one that becomes a boundary edge again is logged again).
+    fn feed_nc_lists(&mut self) {
+        let log_len = self.mesh.boundary_log().len();
+        for k in self.logged..log_len {
+            let e = self.mesh.boundary_log()[k];
+            if !self.mesh.is_boundary_slot(e.0, e.1, e.2) {
+                continue;
+            }
+            let r = self.root_of(e.0);
+            self.nc_boundary[r as usize].push(e);
+        }
+        self.logged = log_len;
+    }
+
+    /// The nearest boundary edge a -> b of NC `root` to `pp` by the segment distance,
+    /// ties by (a, b): the minimum [`Self::winner`]'s scan over every boundary edge of
+    /// the NC finds, searched in the grid of boundary edges ring by ring from P's cell
+    /// (see `edge_grid`). `Err(())` when the search visited more cells than four times
+    /// the NC's list of boundary edges (the caller then scans the list).
+    fn nearest_in_grid(&mut self, pp: DVec3, root: u32) -> Result<Option<BEdge>, ()> {
+        self.feed_nc_lists();
+        let budget = 4 * self.nc_boundary[root as usize].len() + 64;
+        let mut grid = self.grid.take().unwrap_or_else(|| {
+            // At most 4 cells per point: the lists of empty cells cost 24 bytes each.
+            EdgeGrid::new(self.p, self.o.rho, 4 * self.p.len() + 64)
+        });
+        let mesh = &self.mesh;
+        grid.feed(self.p, mesh.boundary_log(), |e| {
+            mesh.is_boundary_slot(e.0, e.1, e.2)
+        });
+        self.edge_mark.resize(3 * self.mesh.tris.len(), 0);
+        let gen_ = self.edge_gen;
+        self.edge_gen += 1;
+        let c = grid.cell(pp);
+        let mut ring = std::mem::take(&mut self.ring);
+        let mut best: Option<(f64, (u32, u32), BEdge)> = None;
+        let mut visited = 0usize;
+        let mut result = Err(());
+        for k in 0i64.. {
+            ring.clear();
+            let all = grid.ring(c, k, &mut ring);
+            visited += ring.len();
+            for &ci in &ring {
+                let mut i = 0;
+                while i < grid.cells[ci].len() {
+                    let (a, b, slot) = grid.cells[ci][i];
+                    if !self.mesh.is_boundary_slot(a, b, slot) {
+                        grid.cells[ci].swap_remove(i);
+                        continue;
+                    }
+                    i += 1;
+                    let m = &mut self.edge_mark[slot as usize];
+                    if *m == gen_ {
+                        continue;
+                    }
+                    *m = gen_;
+                    if self.root_of(a) != root {
+                        continue;
+                    }
+                    let d = self.edge_dist(pp, a, b);
+                    let kk = (a, b);
+                    if best.is_none_or(|(bd, bk, _)| d < bd || (d == bd && kk < bk)) {
+                        best = Some((d, kk, (a, b, slot / 3)));
+                    }
+                }
+            }
+            // Every edge not seen is at least k cells from P (margin: an eighth of a
+            // cell, far above the rounding of the cell and distance computations).
+            let bound = (k as f64 - 0.125) * grid.h;
+            if all || best.is_some_and(|(bd, _, _)| bd < bound) {
+                result = Ok(best.map(|b| b.2));
+                break;
+            }
+            if visited > budget {
+                break;
+            }
+        }
+        self.ring = ring;
+        self.grid = Some(grid);
+        result
+    }
+
     fn root_of(&mut self, v: u32) -> u32 {
         self.nc.find(self.nc_id[v as usize])
     }
@@ -295,7 +384,7 @@ impl State<'_> {
     fn add(&mut self, t: [u32; 3], root: u32) -> Option<u32> {
         // Degenerate triangles (min angle below 1 degree) are refused like non-manifold
         // ones: their normal, which every test uses, is meaningless.
-        let ok = min_angle(self.pt(t[0]), self.pt(t[1]), self.pt(t[2])) > 1f64.to_radians();
+        let ok = !ONE_DEGREE.min_angle_at_most(self.pt(t[0]), self.pt(t[1]), self.pt(t[2]));
         match ok.then(|| self.mesh.add(t)).flatten() {
             Some(id) => {
                 self.nc_tris[root as usize] += 1;
@@ -331,8 +420,7 @@ impl State<'_> {
         let t_new = [i, y, x];
         let n_w = cross(self.p, w);
         let n_new = cross(self.p, t_new);
-        let theta = angle(n_new, n_w);
-        if theta < self.o.theta {
+        if !self.fold.reached_by(n_new, n_w) {
             self.create(i, root, t_new);
             return;
         }
@@ -377,8 +465,7 @@ impl State<'_> {
         let mut m = 0;
         for &v in lg {
             if self.root_of(v) == root {
-                if m == 1 && min_angle(self.pt(i), self.pt(mem[0]), self.pt(v)) <= 1f64.to_radians()
-                {
+                if m == 1 && ONE_DEGREE.min_angle_at_most(self.pt(i), self.pt(mem[0]), self.pt(v)) {
                     continue;
                 }
                 mem[m] = v;
@@ -441,6 +528,28 @@ impl State<'_> {
             }
         }
         if cand.is_empty() {
+            // IMPL-CHOICE: with a true distance and no strict_rho, the nearest edge of the
+            // NC is searched by place (the same edge as the full scan below, see
+            // `edge_grid`); the full scan when that search would visit too many cells.
+            if self.o.edge_distance == EdgeDistance::Segment
+                && !self.o.strict_rho
+                && let Ok(found) = self.nearest_in_grid(pp, root)
+            {
+                #[cfg(debug_assertions)]
+                {
+                    // The same edge as the full scan.
+                    let mut all = Vec::new();
+                    self.nc_boundary_edges(root, &mut all);
+                    let full = all
+                        .iter()
+                        .map(|c| (self.edge_dist(pp, c.0, c.1), (c.0, c.1), *c))
+                        .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)))
+                        .map(|b| b.2);
+                    debug_assert_eq!(found, full, "grid search differs from the full scan");
+                }
+                self.buf = cand;
+                return found;
+            }
             // The paper's scan over every BTM edge of this NC.
             self.nc_boundary_edges(root, &mut cand);
             #[cfg(debug_assertions)]
@@ -506,7 +615,7 @@ impl State<'_> {
         let parts = [[i, b, c], [a, i, c], [a, b, i]];
         let deg = parts
             .iter()
-            .any(|t| min_angle(self.pt(t[0]), self.pt(t[1]), self.pt(t[2])) <= 1e-3);
+            .any(|t| MILLIRAD.min_angle_at_most(self.pt(t[0]), self.pt(t[1]), self.pt(t[2])));
         if deg {
             self.stats.refused += 1;
             return;
@@ -538,7 +647,7 @@ impl State<'_> {
             return false;
         }
         let nc = cross(self.p, cand);
-        if angle(n_new, nc) >= FRAC_PI_2 {
+        if RIGHT.reached_by(n_new, nc) {
             return false;
         }
         let (pa, pb) = (self.pt(a), self.pt(b));
@@ -675,10 +784,10 @@ impl State<'_> {
             let (n1, n2) = ([a, d, c], [d, b, c]);
             let c1 = cross(self.p, n1);
             let c2 = cross(self.p, n2);
-            if angle(c1, c2) >= FRAC_PI_2
-                || angle(c1, cross(self.p, r1)) >= FRAC_PI_2
-                || min_angle(self.pt(a), self.pt(d), self.pt(c)) <= 1e-3
-                || min_angle(self.pt(d), self.pt(b), self.pt(c)) <= 1e-3
+            if RIGHT.reached_by(c1, c2)
+                || RIGHT.reached_by(c1, cross(self.p, r1))
+                || MILLIRAD.min_angle_at_most(self.pt(a), self.pt(d), self.pt(c))
+                || MILLIRAD.min_angle_at_most(self.pt(d), self.pt(b), self.pt(c))
             {
                 continue;
             }

@@ -36,6 +36,91 @@ pub fn angle(a: DVec3, b: DVec3) -> f64 {
     (a.dot(b) / d).clamp(-1.0, 1.0).acos()
 }
 
+/// An angle threshold with its cosine, for deciding `angle(a, b) >= rad` (and the like)
+/// without `acos` where the cosine decides it.
+///
+/// `acos` has a slope of magnitude at least 1 and is evaluated to about one ulp, and
+/// `cos` is the threshold's cosine to well within 1e-12: so when the cosine x that
+/// [`angle`] takes the arc cosine of is more than [`COS_MARGIN`] from `cos`, `acos(x)`
+/// is more than 1e-10 from `rad` on the side the comparison of x gives, and the answer
+/// is the one `angle` would give; otherwise `acos` is evaluated as `angle` does.
+#[derive(Debug, Clone, Copy)]
+pub struct AngleBound {
+    rad: f64,
+    cos: f64,
+}
+
+/// Cosines closer than this to a threshold's cosine are decided by `acos` itself.
+pub const COS_MARGIN: f64 = 1e-9;
+
+/// 1 degree (the smallest angle of an acceptable triangle).
+pub const ONE_DEGREE: AngleBound = AngleBound {
+    rad: 1f64.to_radians(),
+    cos: 0.999_847_695_156_391_2,
+};
+
+/// 1e-3 rad (the smallest angle of a split or flipped triangle).
+pub const MILLIRAD: AngleBound = AngleBound {
+    rad: 1e-3,
+    cos: 0.999_999_500_000_041_7,
+};
+
+/// pi / 2.
+pub const RIGHT: AngleBound = AngleBound {
+    rad: std::f64::consts::FRAC_PI_2,
+    cos: 0.0,
+};
+
+impl AngleBound {
+    /// The threshold `rad`.
+    pub fn new(rad: f64) -> Self {
+        Self {
+            rad,
+            cos: rad.cos(),
+        }
+    }
+
+    /// The threshold `rad` with its cosine given (for constants; it must be within
+    /// 1e-12 of cos(rad)).
+    pub const fn with_cos(rad: f64, cos: f64) -> Self {
+        Self { rad, cos }
+    }
+
+    /// `angle(a, b)` against the threshold, as [`angle`] computes it.
+    #[inline]
+    fn cmp(&self, a: DVec3, b: DVec3) -> std::cmp::Ordering {
+        use std::cmp::Ordering;
+        let d = a.length() * b.length();
+        if d <= 0.0 {
+            return std::f64::consts::FRAC_PI_2
+                .partial_cmp(&self.rad)
+                .unwrap_or(Ordering::Less);
+        }
+        let x = (a.dot(b) / d).clamp(-1.0, 1.0);
+        if x < self.cos - COS_MARGIN {
+            Ordering::Greater
+        } else if x > self.cos + COS_MARGIN {
+            Ordering::Less
+        } else {
+            x.acos().partial_cmp(&self.rad).unwrap_or(Ordering::Less)
+        }
+    }
+
+    /// `angle(a, b) >= rad`.
+    #[inline]
+    pub fn reached_by(&self, a: DVec3, b: DVec3) -> bool {
+        self.cmp(a, b).is_ge()
+    }
+
+    /// `min_angle(a, b, c) <= rad`.
+    #[inline]
+    pub fn min_angle_at_most(&self, a: DVec3, b: DVec3, c: DVec3) -> bool {
+        self.cmp(b - a, c - a).is_le()
+            || self.cmp(c - b, a - b).is_le()
+            || self.cmp(a - c, b - c).is_le()
+    }
+}
+
 /// Smallest interior angle of a triangle (0 for a degenerate one).
 pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let ang = |p: DVec3, q: DVec3, r: DVec3| angle(q - p, r - p);
@@ -44,6 +129,7 @@ pub fn min_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 
 /// Whether the 2-D projection (plane normal `nrm`) of segment p-q crosses r-s in their
 /// interiors.
+#[inline]
 pub fn crosses(nrm: DVec3, p: DVec3, q: DVec3, r: DVec3, s: DVec3) -> bool {
     let orient = |a: DVec3, b: DVec3, c: DVec3| (b - a).cross(c - a).dot(nrm);
     let (d1, d2) = (orient(p, q, r), orient(p, q, s));
@@ -135,6 +221,26 @@ impl Mesh {
         m.bmask.reserve(tris);
         m.edges.reserve(tris * 3 / 2 + 16);
         m
+    }
+
+    /// Empties the mesh: afterwards it is as [`Self::new`] made it (clock, stamps and all),
+    /// but keeps its allocations (a rebuild then reallocates no per-vertex list).
+    pub fn clear(&mut self) {
+        self.tris.clear();
+        self.edges.clear();
+        for l in &mut self.vt {
+            l.clear();
+        }
+        self.bmask.clear();
+        self.bout.fill(0);
+        self.bin.fill(0);
+        self.clock = 0;
+        self.stamp.fill(0);
+        self.journal.clear();
+        self.journaling = false;
+        self.saved_clock = 0;
+        self.log.clear();
+        self.logging = false;
     }
 
     /// Starts logging the directed edges that become boundary edges (see
@@ -411,5 +517,52 @@ impl Mesh {
         self.tris[b as usize] = tb;
         self.link(a, ta);
         self.link(b, tb);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cosine decisions agree with comparing [`angle`] and [`min_angle`], also for
+    /// angles within rounding of the thresholds.
+    #[test]
+    fn angle_bounds_decide_as_the_angles_do() {
+        let bounds = [
+            ONE_DEGREE,
+            MILLIRAD,
+            RIGHT,
+            AngleBound::new(1.0),
+            AngleBound::new(std::f64::consts::FRAC_PI_3),
+        ];
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for b in bounds {
+            for i in 0..20_000 {
+                let a = DVec3::new(1.0, 0.0, 0.0);
+                // Angles spread over [0, pi], every other one next to the threshold.
+                let t = if i % 2 == 0 {
+                    next() * std::f64::consts::PI
+                } else {
+                    (b.rad + (next() - 0.5) * 1e-8).max(0.0)
+                };
+                let v = DVec3::new(t.cos(), t.sin() * next(), t.sin()) * (0.5 + next());
+                assert_eq!(b.reached_by(a, v), angle(a, v) >= b.rad, "{t}");
+                let c = DVec3::new(next(), next(), 0.0);
+                assert_eq!(
+                    b.min_angle_at_most(DVec3::ZERO, v, c),
+                    min_angle(DVec3::ZERO, v, c) <= b.rad
+                );
+            }
+            assert_eq!(
+                b.reached_by(DVec3::ZERO, DVec3::X),
+                angle(DVec3::ZERO, DVec3::X) >= b.rad
+            );
+        }
     }
 }

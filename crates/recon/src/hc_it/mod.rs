@@ -16,6 +16,7 @@
 
 pub mod closure;
 pub mod cluster;
+mod edge_grid;
 mod engine;
 mod mesh;
 pub mod params;
