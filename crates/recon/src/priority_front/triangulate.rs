@@ -111,25 +111,30 @@ impl Mesher<'_> {
         let mut done_near = std::mem::take(&mut self.done_near);
         done_near.clear();
         let fin = &self.fin;
+        // The meshed points are needed by I13 / I14 only.
+        let keep_acc = keep_done || keep_mesh;
         self.grid.for_cells(o, r, |range| {
-            for i in range {
-                if keep_done && state[i] == ACCEPTED && (pts[i] - o).length_squared() <= r2 {
-                    done_near.push(i as u32);
-                }
-                if state[i] == FREE {
-                    let d2 = (pts[i] - o).length_squared();
+            let start = range.start;
+            // One state read and at most one distance per point; the slices drop the
+            // bounds checks.
+            let (st, ps) = (&state[range.clone()], &pts[range]);
+            for (j, (&s, &p)) in st.iter().zip(ps).enumerate() {
+                let i = start + j;
+                if s == FREE {
+                    let d2 = (p - o).length_squared();
                     if d2 <= r2 {
                         if keep_free {
                             free_near.push(i as u32);
                         }
                         pend.push((d2, i as u32));
                     }
-                } else if keep_mesh
-                    && state[i] == ACCEPTED
-                    && fin[i] == NONE
-                    && (pts[i] - o).length_squared() <= r2
-                {
-                    mesh_near.push(i as u32);
+                } else if keep_acc && s == ACCEPTED && (p - o).length_squared() <= r2 {
+                    if keep_done {
+                        done_near.push(i as u32);
+                    }
+                    if keep_mesh && fin[i] == NONE {
+                        mesh_near.push(i as u32);
+                    }
                 }
             }
         });
@@ -714,33 +719,52 @@ impl Mesher<'_> {
     pub(crate) fn hits_mesh(&mut self, tri: [u32; 3]) -> bool {
         self.seen_stamp = self.seen_stamp.wrapping_add(1);
         if self.seen_stamp == 0 {
-            self.f_seen.iter_mut().for_each(|s| *s = 0);
+            self.faces.iter_mut().for_each(|f| f.seen = 0);
             self.seen_stamp = 1;
         }
-        let p = tri.map(|i| self.pts[i as usize]);
+        let stamp = self.seen_stamp;
+        let pts = self.pts;
+        let p = tri.map(|i| pts[i as usize]);
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         let c = (p[0] + p[1] + p[2]) / 3.0;
         let rt = p.iter().map(|&x| x.distance(c)).fold(0.0, f64::max);
         let sep = Separation::new(p, c, rt);
-        let done = std::mem::take(&mut self.done_near);
-        let hit = done.iter().any(|&v| {
-            let reach = rt + self.v_reach[v as usize];
-            if self.pts[v as usize].distance_squared(c) > reach * reach {
-                return false;
+        let [t0, t1, t2] = tri;
+        let (heads, v_reach) = (&self.vf_head, &self.v_reach);
+        let faces = &mut self.faces;
+        for &v in &self.done_near {
+            // Every face on a corner of `tri` shares that corner and is skipped below:
+            // its list need not be walked (exact, the walk would only mark them seen).
+            if v == t0 || v == t1 || v == t2 {
+                continue;
             }
-            let mut k = self.vf_head[v as usize];
+            let reach = rt + v_reach[v as usize];
+            if pts[v as usize].distance_squared(c) > reach * reach {
+                continue;
+            }
+            let mut k = heads[v as usize];
             while k != NONE {
-                let fi = k as usize / 3;
-                k = self.vf_next[k as usize];
-                if self.f_seen[fi] == self.seen_stamp {
+                let f = &mut faces[(k >> 2) as usize];
+                k = f.next[(k & 3) as usize];
+                if f.seen == stamp {
                     continue;
                 }
-                self.f_seen[fi] = self.seen_stamp;
-                let g = self.tris[fi];
-                if g.iter().any(|x| tri.contains(x)) {
+                f.seen = stamp;
+                let g = f.v;
+                // Shares a vertex with `tri` (no short circuit: nine compares).
+                let shared = (g[0] == t0)
+                    | (g[0] == t1)
+                    | (g[0] == t2)
+                    | (g[1] == t0)
+                    | (g[1] == t1)
+                    | (g[1] == t2)
+                    | (g[2] == t0)
+                    | (g[2] == t1)
+                    | (g[2] == t2);
+                if shared {
                     continue;
                 }
-                let q = g.map(|i| self.pts[i as usize]);
+                let q = [pts[g[0] as usize], pts[g[1] as usize], pts[g[2] as usize]];
                 let (glo, ghi) = (q[0].min(q[1]).min(q[2]), q[0].max(q[1]).max(q[2]));
                 if glo.cmple(hi).all()
                     && lo.cmple(ghi).all()
@@ -750,10 +774,8 @@ impl Mesher<'_> {
                     return true;
                 }
             }
-            false
-        });
-        self.done_near = done;
-        hit
+        }
+        false
     }
 
     /// True when direction `x -> dir` lies strictly inside the free sector of `x` whose
