@@ -135,14 +135,15 @@ pub(crate) struct Cand {
 /// One triangle of the IMPL-CHOICE I14 face index: its corners (a copy of its entry in
 /// `tris`), the number of the check that last visited it (deduplication), and per corner
 /// `k` the next corner `4 f' + k'` of the list of faces on that corner's point (`NONE` at
-/// the end). One 32-byte record, so that a face visit of the check reads one cache line
+/// the end; the fourth entry is unused: a power-of-two size, indexable by `k & 3` without
+/// a bounds check). One 32-byte record, so that a face visit of the check reads one cache line
 /// instead of three arrays indexed by face (the walk is memory-bound at 1M points).
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(32))]
 pub(crate) struct FaceRec {
     pub v: [u32; 3],
     pub seen: u32,
-    pub next: [u32; 3],
+    pub next: [u32; 4],
 }
 
 /// Heap entry: (cost bits, FIFO counter, edge, stamp), smallest first.
@@ -306,7 +307,7 @@ impl<'g> Mesher<'g> {
     #[inline]
     pub(crate) fn index_face(&mut self, t: [u32; 3], p: [DVec3; 3]) {
         let f = self.faces.len() as u32;
-        let mut next = [NONE; 3];
+        let mut next = [NONE; 4];
         for (k, &v) in t.iter().enumerate() {
             let v = v as usize;
             next[k] = self.vf_head[v];

@@ -470,10 +470,13 @@ impl Mesher<'_> {
             // Evaluate (largest bound first; a linear scan, as only a few are taken)
             // until the best evaluated score beats every pending bound.
             while !pend.is_empty() {
+                // The first smallest key (the running minimum stays in a register).
                 let mut m = 0;
-                for k in 1..pend.len() {
-                    if pend[k].0 < pend[m].0 {
+                let mut mk = pend[0].0;
+                for (k, &(key, _)) in pend.iter().enumerate().skip(1) {
+                    if key < mk {
                         m = k;
+                        mk = key;
                     }
                 }
                 let u = if seg {
