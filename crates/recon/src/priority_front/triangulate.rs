@@ -118,6 +118,32 @@ impl Mesher<'_> {
             // One state read and at most one distance per point; the slices drop the
             // bounds checks.
             let (st, ps) = (&state[range.clone()], &pts[range]);
+            if keep_acc {
+                // Free and meshed points both need the distance: the ball test comes
+                // first, so that the points outside it (most of the cells) skip the
+                // state branch.
+                for (j, (&s, &p)) in st.iter().zip(ps).enumerate() {
+                    let d2 = (p - o).length_squared();
+                    if d2 > r2 {
+                        continue;
+                    }
+                    let i = start + j;
+                    if s == FREE {
+                        if keep_free {
+                            free_near.push(i as u32);
+                        }
+                        pend.push((d2, i as u32));
+                    } else if s == ACCEPTED {
+                        if keep_done {
+                            done_near.push(i as u32);
+                        }
+                        if keep_mesh && fin[i] == NONE {
+                            mesh_near.push(i as u32);
+                        }
+                    }
+                }
+                return;
+            }
             for (j, (&s, &p)) in st.iter().zip(ps).enumerate() {
                 let i = start + j;
                 if s == FREE {
@@ -1026,5 +1052,80 @@ mod angle_tests {
         }
         assert_eq!(cw_angle(s, s), 0.0);
         assert_eq!(cw_angle(s, [0.0, 0.0]), 0.0);
+    }
+}
+
+#[cfg(test)]
+mod face_index_tests {
+    use super::super::grid::Grid;
+    use super::super::{PriorityFrontParams, mesher_cfg};
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The I14 walk over the face records (faces added by `add_tri` before and after
+    /// `enable_self_check` rebuilt the index) answers as a brute-force scan of every
+    /// face with a corner among the meshed points near the triangle: some face on such
+    /// a point, sharing no vertex with the triangle, intersects it.
+    #[test]
+    fn face_index_walk_matches_brute_force() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let raw: Vec<DVec3> = (0..400)
+            .map(|_| DVec3::new(rng.random(), rng.random(), 0.2 * rng.random::<f64>()))
+            .collect();
+        let (grid, order) = Grid::build(&raw, 0.15);
+        let pts: Vec<DVec3> = order.iter().map(|&i| raw[i as usize]).collect();
+        let r = 0.15;
+        let mut cfg = mesher_cfg(&PriorityFrontParams::default(), r, 0.05);
+        cfg.self_check = false;
+        let mut m = Mesher::new(&pts, &grid, cfg, &vec![false; pts.len()]);
+        // A random triple of distinct points near point `i` (within 0.2).
+        let near_tri = |rng: &mut ChaCha8Rng| loop {
+            let i = rng.random_range(0..pts.len());
+            let mut t = [i as u32; 3];
+            let mut k = 1;
+            for _ in 0..200 {
+                let j = rng.random_range(0..pts.len());
+                if k < 3 && !t[..k].contains(&(j as u32)) && pts[j].distance(pts[i]) < 0.2 {
+                    t[k] = j as u32;
+                    k += 1;
+                }
+            }
+            if k == 3 {
+                return t;
+            }
+        };
+        let tris: Vec<[u32; 3]> = (0..300).map(|_| near_tri(&mut rng)).collect();
+        for &t in &tris[..150] {
+            m.add_tri(t);
+        }
+        m.enable_self_check();
+        for &t in &tris[150..] {
+            m.add_tri(t);
+        }
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..400 {
+            let tri = near_tri(&mut rng);
+            let p = tri.map(|i| pts[i as usize]);
+            let o = (p[0] + p[1] + p[2]) / 3.0;
+            // Meshed points within R of `o`, as the gather lists them.
+            m.done_near = (0..pts.len() as u32)
+                .filter(|&v| {
+                    tris.iter().any(|t| t.contains(&v)) && pts[v as usize].distance(o) <= r
+                })
+                .collect();
+            let want = tris.iter().any(|g| {
+                g.iter().any(|v| m.done_near.contains(v))
+                    && !g.iter().any(|v| tri.contains(v))
+                    && tri_tri_intersect(&p, &g.map(|i| pts[i as usize]))
+            });
+            assert_eq!(m.hits_mesh(tri), want, "{tri:?}");
+            if want {
+                hits += 1;
+            } else {
+                misses += 1;
+            }
+        }
+        assert!(hits > 20 && misses > 20, "{hits} hits, {misses} misses");
     }
 }
