@@ -55,20 +55,9 @@ impl Mesher<'_> {
         self.vf_head = vec![NONE; n];
         self.v_reach = vec![0.0; n];
         let tris = std::mem::take(&mut self.tris);
-        self.vf_next = Vec::with_capacity(3 * tris.len());
-        self.f_seen = Vec::with_capacity(tris.len());
-        for (f, t) in tris.iter().enumerate() {
-            let p = t.map(|i| self.pts[i as usize]);
-            for (k, &v) in t.iter().enumerate() {
-                let v = v as usize;
-                self.vf_next.push(self.vf_head[v]);
-                self.vf_head[v] = 3 * f as u32 + k as u32;
-                let far = p[(k + 1) % 3]
-                    .distance(p[k])
-                    .max(p[(k + 2) % 3].distance(p[k]));
-                self.v_reach[v] = self.v_reach[v].max(far);
-            }
-            self.f_seen.push(0);
+        self.faces = Vec::with_capacity(tris.len());
+        for &t in &tris {
+            self.index_face(t, t.map(|i| self.pts[i as usize]));
         }
         self.tris = tris;
     }

@@ -111,25 +111,56 @@ impl Mesher<'_> {
         let mut done_near = std::mem::take(&mut self.done_near);
         done_near.clear();
         let fin = &self.fin;
+        // The meshed points are needed by I13 / I14 only.
+        let keep_acc = keep_done || keep_mesh;
         self.grid.for_cells(o, r, |range| {
-            for i in range {
-                if keep_done && state[i] == ACCEPTED && (pts[i] - o).length_squared() <= r2 {
-                    done_near.push(i as u32);
+            let start = range.start;
+            // One state read and at most one distance per point; the slices drop the
+            // bounds checks.
+            let (st, ps) = (&state[range.clone()], &pts[range]);
+            if keep_acc {
+                // Free and meshed points both need the distance: the ball test comes
+                // first, so that the points outside it (most of the cells) skip the
+                // state branch.
+                for (j, (&s, &p)) in st.iter().zip(ps).enumerate() {
+                    let d2 = (p - o).length_squared();
+                    if d2 > r2 {
+                        continue;
+                    }
+                    let i = start + j;
+                    if s == FREE {
+                        if keep_free {
+                            free_near.push(i as u32);
+                        }
+                        pend.push((d2, i as u32));
+                    } else if s == ACCEPTED {
+                        if keep_done {
+                            done_near.push(i as u32);
+                        }
+                        if keep_mesh && fin[i] == NONE {
+                            mesh_near.push(i as u32);
+                        }
+                    }
                 }
-                if state[i] == FREE {
-                    let d2 = (pts[i] - o).length_squared();
+                return;
+            }
+            for (j, (&s, &p)) in st.iter().zip(ps).enumerate() {
+                let i = start + j;
+                if s == FREE {
+                    let d2 = (p - o).length_squared();
                     if d2 <= r2 {
                         if keep_free {
                             free_near.push(i as u32);
                         }
                         pend.push((d2, i as u32));
                     }
-                } else if keep_mesh
-                    && state[i] == ACCEPTED
-                    && fin[i] == NONE
-                    && (pts[i] - o).length_squared() <= r2
-                {
-                    mesh_near.push(i as u32);
+                } else if keep_acc && s == ACCEPTED && (p - o).length_squared() <= r2 {
+                    if keep_done {
+                        done_near.push(i as u32);
+                    }
+                    if keep_mesh && fin[i] == NONE {
+                        mesh_near.push(i as u32);
+                    }
                 }
             }
         });
@@ -465,10 +496,13 @@ impl Mesher<'_> {
             // Evaluate (largest bound first; a linear scan, as only a few are taken)
             // until the best evaluated score beats every pending bound.
             while !pend.is_empty() {
+                // The first smallest key (the running minimum stays in a register).
                 let mut m = 0;
-                for k in 1..pend.len() {
-                    if pend[k].0 < pend[m].0 {
+                let mut mk = pend[0].0;
+                for (k, &(key, _)) in pend.iter().enumerate().skip(1) {
+                    if key < mk {
                         m = k;
+                        mk = key;
                     }
                 }
                 let u = if seg {
@@ -714,33 +748,52 @@ impl Mesher<'_> {
     pub(crate) fn hits_mesh(&mut self, tri: [u32; 3]) -> bool {
         self.seen_stamp = self.seen_stamp.wrapping_add(1);
         if self.seen_stamp == 0 {
-            self.f_seen.iter_mut().for_each(|s| *s = 0);
+            self.faces.iter_mut().for_each(|f| f.seen = 0);
             self.seen_stamp = 1;
         }
-        let p = tri.map(|i| self.pts[i as usize]);
+        let stamp = self.seen_stamp;
+        let pts = self.pts;
+        let p = tri.map(|i| pts[i as usize]);
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         let c = (p[0] + p[1] + p[2]) / 3.0;
         let rt = p.iter().map(|&x| x.distance(c)).fold(0.0, f64::max);
         let sep = Separation::new(p, c, rt);
-        let done = std::mem::take(&mut self.done_near);
-        let hit = done.iter().any(|&v| {
-            let reach = rt + self.v_reach[v as usize];
-            if self.pts[v as usize].distance_squared(c) > reach * reach {
-                return false;
+        let [t0, t1, t2] = tri;
+        let (heads, v_reach) = (&self.vf_head, &self.v_reach);
+        let faces = &mut self.faces;
+        for &v in &self.done_near {
+            // Every face on a corner of `tri` shares that corner and is skipped below:
+            // its list need not be walked (exact, the walk would only mark them seen).
+            if v == t0 || v == t1 || v == t2 {
+                continue;
             }
-            let mut k = self.vf_head[v as usize];
+            let reach = rt + v_reach[v as usize];
+            if pts[v as usize].distance_squared(c) > reach * reach {
+                continue;
+            }
+            let mut k = heads[v as usize];
             while k != NONE {
-                let fi = k as usize / 3;
-                k = self.vf_next[k as usize];
-                if self.f_seen[fi] == self.seen_stamp {
+                let f = &mut faces[(k >> 2) as usize];
+                k = f.next[(k & 3) as usize];
+                if f.seen == stamp {
                     continue;
                 }
-                self.f_seen[fi] = self.seen_stamp;
-                let g = self.tris[fi];
-                if g.iter().any(|x| tri.contains(x)) {
+                f.seen = stamp;
+                let g = f.v;
+                // Shares a vertex with `tri` (no short circuit: nine compares).
+                let shared = (g[0] == t0)
+                    | (g[0] == t1)
+                    | (g[0] == t2)
+                    | (g[1] == t0)
+                    | (g[1] == t1)
+                    | (g[1] == t2)
+                    | (g[2] == t0)
+                    | (g[2] == t1)
+                    | (g[2] == t2);
+                if shared {
                     continue;
                 }
-                let q = g.map(|i| self.pts[i as usize]);
+                let q = [pts[g[0] as usize], pts[g[1] as usize], pts[g[2] as usize]];
                 let (glo, ghi) = (q[0].min(q[1]).min(q[2]), q[0].max(q[1]).max(q[2]));
                 if glo.cmple(hi).all()
                     && lo.cmple(ghi).all()
@@ -750,10 +803,8 @@ impl Mesher<'_> {
                     return true;
                 }
             }
-            false
-        });
-        self.done_near = done;
-        hit
+        }
+        false
     }
 
     /// True when direction `x -> dir` lies strictly inside the free sector of `x` whose
@@ -1001,5 +1052,80 @@ mod angle_tests {
         }
         assert_eq!(cw_angle(s, s), 0.0);
         assert_eq!(cw_angle(s, [0.0, 0.0]), 0.0);
+    }
+}
+
+#[cfg(test)]
+mod face_index_tests {
+    use super::super::grid::Grid;
+    use super::super::{PriorityFrontParams, mesher_cfg};
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The I14 walk over the face records (faces added by `add_tri` before and after
+    /// `enable_self_check` rebuilt the index) answers as a brute-force scan of every
+    /// face with a corner among the meshed points near the triangle: some face on such
+    /// a point, sharing no vertex with the triangle, intersects it.
+    #[test]
+    fn face_index_walk_matches_brute_force() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let raw: Vec<DVec3> = (0..400)
+            .map(|_| DVec3::new(rng.random(), rng.random(), 0.2 * rng.random::<f64>()))
+            .collect();
+        let (grid, order) = Grid::build(&raw, 0.15);
+        let pts: Vec<DVec3> = order.iter().map(|&i| raw[i as usize]).collect();
+        let r = 0.15;
+        let mut cfg = mesher_cfg(&PriorityFrontParams::default(), r, 0.05);
+        cfg.self_check = false;
+        let mut m = Mesher::new(&pts, &grid, cfg, &vec![false; pts.len()]);
+        // A random triple of distinct points near point `i` (within 0.2).
+        let near_tri = |rng: &mut ChaCha8Rng| loop {
+            let i = rng.random_range(0..pts.len());
+            let mut t = [i as u32; 3];
+            let mut k = 1;
+            for _ in 0..200 {
+                let j = rng.random_range(0..pts.len());
+                if k < 3 && !t[..k].contains(&(j as u32)) && pts[j].distance(pts[i]) < 0.2 {
+                    t[k] = j as u32;
+                    k += 1;
+                }
+            }
+            if k == 3 {
+                return t;
+            }
+        };
+        let tris: Vec<[u32; 3]> = (0..300).map(|_| near_tri(&mut rng)).collect();
+        for &t in &tris[..150] {
+            m.add_tri(t);
+        }
+        m.enable_self_check();
+        for &t in &tris[150..] {
+            m.add_tri(t);
+        }
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..400 {
+            let tri = near_tri(&mut rng);
+            let p = tri.map(|i| pts[i as usize]);
+            let o = (p[0] + p[1] + p[2]) / 3.0;
+            // Meshed points within R of `o`, as the gather lists them.
+            m.done_near = (0..pts.len() as u32)
+                .filter(|&v| {
+                    tris.iter().any(|t| t.contains(&v)) && pts[v as usize].distance(o) <= r
+                })
+                .collect();
+            let want = tris.iter().any(|g| {
+                g.iter().any(|v| m.done_near.contains(v))
+                    && !g.iter().any(|v| tri.contains(v))
+                    && tri_tri_intersect(&p, &g.map(|i| pts[i as usize]))
+            });
+            assert_eq!(m.hits_mesh(tri), want, "{tri:?}");
+            if want {
+                hits += 1;
+            } else {
+                misses += 1;
+            }
+        }
+        assert!(hits > 20 && misses > 20, "{hits} hits, {misses} misses");
     }
 }
