@@ -197,7 +197,7 @@ pub struct PriorityFrontParams {
     /// ears only. Default true.
     pub fill_holes_dp: bool,
     /// IMPL-CHOICE I17: a loop the I15 fillers cannot close is enlarged by removing the
-    /// faces within 1, 2, ... up to this many vertex rings of it, and the enlarged loop
+    /// faces within 1, 2, ... up to this many edge steps of it, and the enlarged loop
     /// is filled; where that fails too, the faces are put back. 0 = off. Default 2.
     pub fill_holes_peel: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that

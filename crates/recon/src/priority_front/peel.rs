@@ -6,8 +6,8 @@
 //! that would close the loop folds back onto a rim face or crosses one (on the real
 //! fandisk, rocker arm and golf club every such loop of 3-6 vertices is of this kind).
 //! The remedy is the usual one of hole fillers: take the rim away and fill the larger,
-//! cleaner loop. For depth d = 1, 2, ... the faces within d vertex rings of such a loop
-//! are removed, when the remaining border is one simple loop that touches no other loop,
+//! cleaner loop. For depth d = 1, 2, ... the faces within d edge steps of such a loop
+//! (its rim, then the faces across the rim's edges) are removed, when the remaining border is one simple loop that touches no other loop,
 //! and the enlarged loop is given to the I15 fillers (same bounds, same crossing test).
 //! A loop that is still open afterwards gets its faces back unchanged, so the pass never
 //! leaves a hole larger than it found. Points left without a face by a successful refill
@@ -16,8 +16,7 @@
 use glam::DVec3;
 
 use super::complete::VertexFaces;
-use super::grid::Grid;
-use super::grid::NONE;
+use super::grid::{Grid, NONE};
 use super::mesher::{ACCEPTED, Cfg, FREE, Mesher, tri_normal};
 
 /// The mesh being repaired: faces, point states and front loops (vertex cycles in front
@@ -92,7 +91,6 @@ fn plan_peels(
             on_loop[v as usize] = i as u32;
         }
     }
-    let mut claimed = vec![false; tris.len()];
     let mut in_peel = vec![false; tris.len()];
     let mut touched = vec![false; n];
     let mut peels = Vec::new();
@@ -101,12 +99,13 @@ fn plan_peels(
             continue;
         }
         let faces = rings(tris, l, vf, d);
+        // A face of an earlier peel has its vertices touched, so this also keeps the
+        // peels' faces apart.
         let ok = faces.iter().all(|&f| {
-            !claimed[f as usize]
-                && tris[f as usize].iter().all(|&v| {
-                    !touched[v as usize]
-                        && (on_loop[v as usize] == NO || on_loop[v as usize] == li as u32)
-                })
+            tris[f as usize].iter().all(|&v| {
+                !touched[v as usize]
+                    && (on_loop[v as usize] == NO || on_loop[v as usize] == li as u32)
+            })
         });
         if !ok || faces.is_empty() {
             continue;
@@ -120,7 +119,6 @@ fn plan_peels(
         }
         let Some(grown) = grown else { continue };
         for &f in &faces {
-            claimed[f as usize] = true;
             for &v in &tris[f as usize] {
                 touched[v as usize] = true;
             }
@@ -139,7 +137,7 @@ fn plan_peels(
 fn rings(tris: &[[u32; 3]], l: &[u32], vf: &VertexFaces, d: usize) -> Vec<u32> {
     let k = l.len();
     let mut faces: Vec<u32> = (0..k)
-        .filter_map(|i| half_edge_face(tris, vf, l[i], l[(i + 1) % k]))
+        .filter_map(|i| half_edge_face(tris, vf, l[i], l[(i + 1) % k], |_| false))
         .collect();
     faces.sort_unstable();
     faces.dedup();
@@ -148,7 +146,7 @@ fn rings(tris: &[[u32; 3]], l: &[u32], vf: &VertexFaces, d: usize) -> Vec<u32> {
         for &f in &faces {
             let t = tris[f as usize];
             for j in 0..3 {
-                more.extend(half_edge_face(tris, vf, t[(j + 1) % 3], t[j]));
+                more.extend(half_edge_face(tris, vf, t[(j + 1) % 3], t[j], |_| false));
             }
         }
         more.sort_unstable();
@@ -158,19 +156,17 @@ fn rings(tris: &[[u32; 3]], l: &[u32], vf: &VertexFaces, d: usize) -> Vec<u32> {
     faces
 }
 
-/// The face with half-edge `u -> v`, if any.
-fn half_edge_face(tris: &[[u32; 3]], vf: &VertexFaces, u: u32, v: u32) -> Option<u32> {
+/// The face with half-edge `u -> v`, among those not `removed`, if any.
+fn half_edge_face(
+    tris: &[[u32; 3]],
+    vf: &VertexFaces,
+    u: u32,
+    v: u32,
+    removed: impl Fn(u32) -> bool,
+) -> Option<u32> {
     vf.of(u).iter().copied().find(|&g| {
         let t = tris[g as usize];
-        (0..3).any(|j| t[j] == u && t[(j + 1) % 3] == v)
-    })
-}
-
-/// The face other than those with `in_peel` that has half-edge `v -> u`, if any.
-fn twin(tris: &[[u32; 3]], vf: &VertexFaces, in_peel: &[bool], u: u32, v: u32) -> Option<u32> {
-    vf.of(v).iter().copied().find(|&g| {
-        let t = tris[g as usize];
-        !in_peel[g as usize] && (0..3).any(|k| t[k] == v && t[(k + 1) % 3] == u)
+        !removed(g) && (0..3).any(|j| t[j] == u && t[(j + 1) % 3] == v)
     })
 }
 
@@ -189,7 +185,7 @@ fn border(
         let t = tris[f as usize];
         for k in 0..3 {
             let (u, v) = (t[k], t[(k + 1) % 3]);
-            if twin(tris, vf, in_peel, u, v).is_some() {
+            if half_edge_face(tris, vf, v, u, |g| in_peel[g as usize]).is_some() {
                 next.push((v, u));
             }
         }
@@ -241,7 +237,6 @@ fn refill(
         .map(|(t, _)| *t)
         .collect();
     let vf = VertexFaces::new(n, &kept);
-    let none = vec![false; kept.len()];
     let fronts = mesh
         .loops
         .iter()
@@ -255,7 +250,7 @@ fn refill(
         for i in 0..k {
             let (a, c) = (l[i], l[(i + 1) % k]);
             // The face on the mesh side of front edge a -> c has half-edge a -> c.
-            let nrm = twin(&kept, &vf, &none, c, a).map_or(DVec3::ZERO, |f| {
+            let nrm = half_edge_face(&kept, &vf, a, c, |_| false).map_or(DVec3::ZERO, |f| {
                 let t = kept[f as usize].map(|v| pts[v as usize]);
                 tri_normal(t[0], t[1], t[2])
             });
@@ -342,17 +337,8 @@ mod tests {
         })
     }
 
-    #[test]
-    fn a_hole_loop_is_in_front_order() {
-        let m = 6;
-        let tris = grid_mesh(m, &[2 * (m - 1) + 2]);
-        let l = hole_loop(m, 2, 2);
-        for i in 0..l.len() {
-            assert!(has_half_edge(&tris, &[], l[i], l[(i + 1) % l.len()]));
-        }
-    }
-
-    /// The rim of a one-cell hole is its four edge neighbours; the border left without
+    /// The fixture's hole loop is in front order. The rim of a one-cell hole is its four
+    /// edge neighbours; the border left without
     /// them is one simple cycle of 8 vertices whose every edge has its face on the mesh
     /// side, and depth 2 takes a larger rim with a longer border.
     #[test]
@@ -361,6 +347,9 @@ mod tests {
         let hole = 3 * (m - 1) + 3;
         let tris = grid_mesh(m, &[hole]);
         let l = hole_loop(m, 3, 3);
+        for i in 0..l.len() {
+            assert!(has_half_edge(&tris, &[], l[i], l[(i + 1) % l.len()]));
+        }
         let vf = VertexFaces::new((m * m) as usize, &tris);
         let mut last = 0;
         for d in 1..=2 {
