@@ -93,6 +93,27 @@ fn rocker_arm_vertices_are_watertight_genus_one() {
     assert!(kept_without_peel >= 3, "{kept_without_peel}");
 }
 
+/// Fandisk (6,475 vertices, genus 0, closed; CAD edges up to several ρ, 90-150 degree
+/// creases), one and two threads, three seeds: one genus-0 piece, and at most one
+/// vertex refused (measured 0-1). Before the I15 insertion reached crease vertices
+/// above the chamfer growth cuts under them, and points under folds, 2-23 were refused
+/// per run.
+#[test]
+fn fandisk_vertices_are_one_genus_zero_piece_with_crease_points_meshed() {
+    let mesh = real("fandisk");
+    for threads in [1, 2] {
+        for seed in [1, 2, 3] {
+            let rec = run(mesh.vertices().to_vec(), threads, seed);
+            let t = analyze(&rec.mesh);
+            assert_manifold_oriented(&t);
+            assert_eq!(t.components, 1, "threads {threads} seed {seed}: {t:?}");
+            assert_eq!(t.genus, Some(0), "threads {threads} seed {seed}");
+            let on = refused_on_surface(&mesh, &rec);
+            assert!(on <= 1, "threads {threads} seed {seed}: {on} refused");
+        }
+    }
+}
+
 /// 3holes (3,596 vertices, genus 3, closed; nearly uniform vertex spacing: mesh edges
 /// at most 2.1 ρ): watertight with genus 3 in one piece for three seeds, and no vertex
 /// refused (11-16 before IMPL-CHOICE I15 inserted the covered points, 25-26 without
@@ -296,7 +317,8 @@ fn run_with(mesh: &TriMesh, p: PriorityFrontParams, seed: u64) -> (TopologyRepor
 /// IMPL-CHOICE I15 (surface completion, on by default): on the rocker arm's vertices
 /// the leftover slits are closed and the covered points inserted, so the mesh is
 /// watertight with the arm's genus 1 in one piece and almost no point refused
-/// (measured 10-11 of 10,044). With both completion steps off (the paper) the same runs
+/// (measured 2 of 10,044; 10-11 before the insertion reached the corners of long CAD
+/// triangles and crease vertices). With both completion steps off (the paper) the same runs
 /// keep 1-3 loops and over 100 refused points on the surface, so a no-op fails here.
 #[test]
 fn surface_completion_closes_slits_and_inserts_covered_points() {
@@ -312,7 +334,7 @@ fn surface_completion_closes_slits_and_inserts_covered_points() {
         assert!(t.watertight, "seed {seed}: {t:?}");
         assert_eq!((t.genus, t.components), (Some(1), 1), "seed {seed}");
         assert!(
-            refused <= 20,
+            refused <= 4,
             "seed {seed}: {refused} refused on the surface"
         );
         let (t0, refused0) = run_with(&mesh, paper.clone(), seed);

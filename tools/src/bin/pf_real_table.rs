@@ -10,7 +10,10 @@
 //! default `1,2,3`), `RECON_PARAMS` (JSON parameters; `threads` is overridden),
 //! `PF_NOSELF` (skip the self-intersection count, which dominates the probe's time),
 //! `PF_DETAIL` (also print each component's faces, genus and loops, and each boundary
-//! loop's edges, length and centroid).
+//! loop's edges, length and centroid), `PF_REFUSED` (each refused on-surface point: its
+//! distance to the output mesh and to the nearest output vertex in rho, whether the
+//! output's nearest point is inside a face, boundary vertices within 3 rho, and the
+//! largest angle between the reference normals of its faces).
 
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Reconstructor, RunCtx};
@@ -107,6 +110,9 @@ fn main() {
                 if std::env::var("PF_DETAIL").is_ok() {
                     print_detail(&rec.mesh, &topo);
                 }
+                if std::env::var("PF_REFUSED").is_ok() {
+                    print_refused(&mesh, &rec, &used);
+                }
             }
         }
     }
@@ -172,6 +178,77 @@ fn print_detail(mesh: &reconbench_geom::TriMesh, topo: &reconbench_geom::topolog
         println!(
             "  boundary vertices (first 20): {:?}",
             &bnd[..bnd.len().min(20)]
+        );
+    }
+}
+
+/// One line per refused on-surface point (see the module doc, `PF_REFUSED`).
+fn print_refused(
+    reference: &reconbench_geom::TriMesh,
+    rec: &reconbench_geom::method::Reconstruction,
+    used: &[bool],
+) {
+    use reconbench_geom::method::Diagnostic;
+    let rho = match rec.diagnostics.get("rho") {
+        Some(Diagnostic::Number(r)) => *r,
+        _ => 1.0,
+    };
+    let out = &rec.mesh;
+    if out.n_faces() == 0 {
+        return;
+    }
+    let bvh = reconbench_geom::spatial::MeshBvh::new(out).expect("bvh");
+    let ov = out.vertices();
+    let mut count = std::collections::HashMap::<(u32, u32), u32>::new();
+    for f in out.faces() {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let bnd: Vec<glam::DVec3> = count
+        .iter()
+        .filter(|(_, c)| **c == 1)
+        .flat_map(|((a, b), _)| [ov[*a as usize], ov[*b as usize]])
+        .collect();
+    let rv = reference.vertices();
+    let mut fnorm: Vec<Vec<glam::DVec3>> = vec![Vec::new(); rv.len()];
+    for f in reference.faces() {
+        let [a, b, c] = f.map(|i| rv[i as usize]);
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        for &i in f {
+            fnorm[i as usize].push(n);
+        }
+    }
+    let used_out: std::collections::HashSet<u32> = out.faces().iter().flatten().copied().collect();
+    for &i in &rec.refused {
+        if !used[i as usize] {
+            continue;
+        }
+        let p = rv[i as usize];
+        let hit = bvh.closest_point(p).expect("closest");
+        let f = out.faces()[hit.face as usize];
+        let corner = f
+            .iter()
+            .map(|&v| ov[v as usize].distance(hit.point))
+            .fold(f64::INFINITY, f64::min);
+        let inside = corner > 1e-9 * rho;
+        let dv = used_out
+            .iter()
+            .map(|&v| ov[v as usize].distance(p))
+            .fold(f64::INFINITY, f64::min);
+        let nb = bnd.iter().filter(|q| q.distance(p) <= 3.0 * rho).count();
+        let ns = &fnorm[i as usize];
+        let mut crease: f64 = 0.0;
+        for a in ns {
+            for b in ns {
+                crease = crease.max(a.dot(*b).clamp(-1.0, 1.0).acos().to_degrees());
+            }
+        }
+        println!(
+            "  refused {i}: d_mesh {:.3} rho, d_vertex {:.3} rho, on_face {inside}, boundary_near {nb}, crease {crease:.0} deg",
+            hit.distance / rho,
+            dv / rho
         );
     }
 }

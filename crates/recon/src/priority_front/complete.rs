@@ -13,17 +13,20 @@
 //!    kept, with its rim untouched; a slit between two fronts is zipped. A loop whose
 //!    greedy ears run into a dead end is then triangulated by the least-fold programme
 //!    of `fill_dp.rs` under the same bounds (`fill_holes_dp`).
-//! 2. [`insert_covered`]: every point left unmeshed that projects into a triangle
-//!    within the I12 height bound of it (the definition of a covered point) and lies on
-//!    the plane of its neighbours (`insert_height`, `insert_rel`: so that outliers near
-//!    the surface stay refused) is inserted there: the triangle is split in three (or,
-//!    beside a crease, its nearest edge is split), unless a new triangle would cross a
-//!    triangle near it. The mesh stays interpolating,
-//!    manifold and consistently oriented; its topology does not change. Points that are
-//!    above no triangle or farther from it (outliers) stay refused.
+//! 2. [`insert_covered`]: every point left unmeshed that lies on the surface of its
+//!    meshed neighbours (their plane, or their quadric on a curved patch: `insert_height`,
+//!    `insert_rel`, `insert_quadric`; so that outliers near the surface stay refused) and
+//!    projects into a triangle within the I12 height bound of it (the definition of a
+//!    covered point; up to the neighbours' own band beside a crease, where growth cut
+//!    the corner under a crease vertex) is inserted there: the triangle is split in
+//!    three, or an edge it projects onto and its two triangles in two. Candidates are
+//!    tried lowest first until one makes no new crossing with a triangle near it. The
+//!    mesh stays interpolating, manifold and consistently oriented; its topology does
+//!    not change. Points that are above no triangle or farther from it (outliers) stay
+//!    refused.
 
 use glam::DVec3;
-use reconbench_geom::linalg::{covariance, sym_eigen3_smallest};
+use reconbench_geom::linalg::{covariance, sym_eigen3_smallest, weighted_least_squares};
 use reconbench_geom::spatial::tri_tri_intersect;
 
 use super::grid::{Grid, NONE};
@@ -244,24 +247,28 @@ pub(crate) struct CoverBound {
     /// ... or this times the neighbours' RMS residual from it, where larger (curved or
     /// creased neighbourhoods; `insert_rel`).
     pub plane_rel: f64,
+    /// Whether a point off that plane may lie on the neighbours' quadric instead
+    /// (`insert_quadric`).
+    pub quadric: bool,
 }
 
 /// Neighbours whose plane a point must lie on (the k of `pf`'s plane fit).
 const PLANE_K: usize = 12;
 
-/// Whether `p` lies on the least-squares plane of its [`PLANE_K`] nearest meshed points
-/// (searched out to 4 `plane_radius`): its height over the plane is at most
-/// max(`plane_abs`, `plane_rel` x their RMS residual). Only meshed points count, so
-/// other outliers nearby do not widen the band. A point on the sampled surface passes
-/// wherever its neighbours do; a point floating above a clean surface does not.
-fn on_local_plane(
+/// When `p` lies on the least-squares plane of its [`PLANE_K`] nearest meshed points
+/// (searched out to 4 `plane_radius`): the band it lies within, max(`plane_abs`,
+/// `plane_rel` x their RMS residual); `None` when it lies farther from the plane. Only
+/// meshed points count, so other outliers nearby do not widen the band. A point on the
+/// sampled surface passes wherever its neighbours do; a point floating above a clean
+/// surface does not.
+fn local_plane_band(
     pts: &[DVec3],
     state: &[u8],
     grid: &Grid,
     p: u32,
     bound: &CoverBound,
     nb: &mut Vec<(f64, u32)>,
-) -> bool {
+) -> Option<f64> {
     let pp = pts[p as usize];
     let mut r = bound.plane_radius;
     for _ in 0..3 {
@@ -280,7 +287,7 @@ fn on_local_plane(
         r *= 2.0;
     }
     if nb.len() < 6 {
-        return false;
+        return None;
     }
     nb.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let q: Vec<DVec3> = nb
@@ -288,22 +295,60 @@ fn on_local_plane(
         .take(PLANE_K)
         .map(|&(_, v)| pts[v as usize])
         .collect();
-    let Ok(cov) = covariance(&q, None) else {
-        return false;
-    };
-    let Ok(eig) = sym_eigen3_smallest(cov.matrix) else {
-        return false;
-    };
+    let cov = covariance(&q, None).ok()?;
+    let eig = sym_eigen3_smallest(cov.matrix).ok()?;
     let rms = eig.values[0].max(0.0).sqrt();
     let h = (pp - cov.centroid).dot(eig.vector).abs();
-    h <= bound.plane_abs.max(bound.plane_rel * rms)
+    let band = bound.plane_abs.max(bound.plane_rel * rms);
+    let on =
+        h <= band || (bound.quadric && on_local_quadric(&q, cov.centroid, eig.vector, pp, bound));
+    on.then_some(band)
+}
+
+/// Whether `p` lies on the least-squares quadric height function over the plane
+/// (centroid `c`, normal `n`) of the points `q`: within max(`plane_abs`, `plane_rel` x
+/// the fit's residual standard error). On a curved patch the plane's residual is mostly
+/// curvature, so a surface point can stand off the plane by more than its band while
+/// lying on the quadric; an outlier above a curved surface lies off both.
+fn on_local_quadric(q: &[DVec3], c: DVec3, n: DVec3, p: DVec3, bound: &CoverBound) -> bool {
+    const TERMS: usize = 6;
+    if q.len() <= TERMS {
+        return false;
+    }
+    let u = n.any_orthonormal_vector();
+    let v = n.cross(u);
+    let row = |x: DVec3| {
+        let d = x - c;
+        let (a, b) = (d.dot(u), d.dot(v));
+        ([a * a, a * b, b * b, a, b, 1.0], d.dot(n))
+    };
+    let mut rows = Vec::with_capacity(q.len() * TERMS);
+    let mut z = Vec::with_capacity(q.len());
+    for &x in q {
+        let (r, h) = row(x);
+        rows.extend_from_slice(&r);
+        z.push(h);
+    }
+    let Ok(coef) = weighted_least_squares(&rows, &z, &[], TERMS) else {
+        return false;
+    };
+    let eval = |r: &[f64]| r.iter().zip(&coef).map(|(a, b)| a * b).sum::<f64>();
+    let ssr: f64 = rows
+        .chunks_exact(TERMS)
+        .zip(&z)
+        .map(|(r, h)| (eval(r) - h).powi(2))
+        .sum();
+    let se = (ssr / (q.len() - TERMS) as f64).sqrt();
+    let (r, h) = row(p);
+    (eval(&r) - h).abs() <= bound.plane_abs.max(bound.plane_rel * se)
 }
 
 /// Inserts every point whose `state` is not [`ACCEPTED`] (and that is not flagged in
-/// `skip`: duplicates) into the mesh where it is covered: into the triangle of `tris` it
-/// projects into (split in three), or, where it projects into none (beside a crease),
-/// onto the nearest interior edge it projects onto (its two triangles split in two),
-/// when it lies within the height bound of that triangle or edge. Orientation is kept.
+/// `skip`: duplicates) and that lies on its meshed neighbours' surface into the mesh
+/// where it is covered: into a triangle of `tris` it projects into (split in three), or
+/// else onto an interior edge it projects onto (its two triangles split in two), within
+/// [`height_bound`] of that triangle or edge. The candidates are tried lowest first;
+/// the first whose new triangles make no new crossing is taken. Orientation is kept.
 /// Points are taken in index order (deterministic). Returns the number inserted; their
 /// state becomes [`ACCEPTED`].
 pub(crate) fn insert_covered(
@@ -323,21 +368,22 @@ pub(crate) fn insert_covered(
     }
     let n0 = tris.len();
     let vf = VertexFaces::new(n, &tris[..n0]);
+    let reach = corner_reach(pts, &tris[..n0], bound.radius);
     let mut tree = SplitTree::new(n0);
     let mut near: Vec<u32> = Vec::new();
     let mut leaves: Vec<u32> = Vec::new();
     let mut nb: Vec<(f64, u32)> = Vec::new();
+    let mut cands: Vec<Split> = Vec::new();
     let mut inserted = 0;
     for &p in &todo {
         let pp = pts[p as usize];
-        if !on_local_plane(pts, state, grid, p, &bound, &mut nb) {
+        let Some(band) = local_plane_band(pts, state, grid, p, &bound, &mut nb) else {
             continue;
-        }
+        };
         near.clear();
-        let r = bound.radius;
-        grid.for_cells(pp, r, |range| {
+        grid.for_cells(pp, reach, |range| {
             for v in range {
-                if v < n && state[v] == ACCEPTED && pts[v].distance_squared(pp) <= r * r {
+                if v < n && state[v] == ACCEPTED && pts[v].distance_squared(pp) <= reach * reach {
                     near.push(v as u32);
                 }
             }
@@ -350,27 +396,31 @@ pub(crate) fn insert_covered(
         }
         leaves.sort_unstable();
         leaves.dedup();
-        if let Some(f) = best_face(pts, tris, &leaves, pp, bound) {
-            let [a, b, c] = tris[f as usize];
-            let kids = [[a, b, p], [b, c, p], [c, a, p]];
-            if crosses_leaves(pts, tris, &leaves, &kids) {
-                continue;
+        cands.clear();
+        face_splits(pts, tris, &leaves, pp, bound, band, &mut cands);
+        let n_faces = cands.len();
+        edge_splits(pts, tris, &leaves, pp, bound, band, &mut cands);
+        // Faces first (lowest first), then edges (nearest first).
+        cands[..n_faces].sort_unstable_by(|a, b| a.h.total_cmp(&b.h).then(a.f.cmp(&b.f)));
+        cands[n_faces..].sort_unstable_by(|a, b| a.h.total_cmp(&b.h).then(a.f.cmp(&b.f)));
+        let done = cands.iter().any(|c| {
+            let (kids, parents) = c.kids(tris, p);
+            if crosses_leaves(pts, tris, &leaves, &kids, &parents) {
+                return false;
             }
-            tree.split(tris, f, &kids);
-        } else if let Some((f, g, u, v)) = best_edge(pts, tris, &leaves, pp, bound) {
-            let w = third(tris[f as usize], u, v);
-            let x = third(tris[g as usize], v, u);
-            let kids = [[u, p, w], [p, v, w], [v, p, x], [p, u, x]];
-            if crosses_leaves(pts, tris, &leaves, &kids) {
-                continue;
+            match c.g {
+                NONE => tree.split(tris, c.f, &kids),
+                g => {
+                    tree.split(tris, c.f, &kids[..2]);
+                    tree.split(tris, g, &kids[2..]);
+                }
             }
-            tree.split(tris, f, &kids[..2]);
-            tree.split(tris, g, &kids[2..]);
-        } else {
-            continue;
+            true
+        });
+        if done {
+            state[p as usize] = ACCEPTED;
+            inserted += 1;
         }
-        state[p as usize] = ACCEPTED;
-        inserted += 1;
     }
     if inserted > 0 {
         // Keep the leaves in order: an original face's place goes to its leaves.
@@ -383,49 +433,124 @@ pub(crate) fn insert_covered(
     inserted
 }
 
+/// How far from a point the corners of a triangle it projects into can lie: the corner
+/// search radius R, or the mesh's longest edge where that is longer (sparse CAD regions
+/// have triangles of several R), at most 3 R.
+fn corner_reach(pts: &[DVec3], tris: &[[u32; 3]], radius: f64) -> f64 {
+    let longest = tris
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .map(|(u, v)| pts[u as usize].distance_squared(pts[v as usize]))
+        .fold(0.0, f64::max)
+        .sqrt();
+    radius.max(longest.min(3.0 * radius))
+}
+
+/// One way to insert a point: split leaf `f` in three (`g == NONE`), or split the edge
+/// `u -> v` of `f` and its twin leaf `g` in two each; `h` is the point's height over
+/// the triangle or its distance from the edge.
+#[derive(Clone, Copy)]
+struct Split {
+    h: f64,
+    f: u32,
+    g: u32,
+    u: u32,
+    v: u32,
+}
+
+impl Split {
+    /// The new triangles with point `p` (orientation kept) and the triangles they
+    /// replace.
+    fn kids(&self, tris: &[[u32; 3]], p: u32) -> (Vec<[u32; 3]>, Vec<u32>) {
+        let t = tris[self.f as usize];
+        if self.g == NONE {
+            let [a, b, c] = t;
+            return (vec![[a, b, p], [b, c, p], [c, a, p]], vec![self.f]);
+        }
+        let (u, v) = (self.u, self.v);
+        let w = third(t, u, v);
+        let x = third(tris[self.g as usize], v, u);
+        (
+            vec![[u, p, w], [p, v, w], [v, p, x], [p, u, x]],
+            vec![self.f, self.g],
+        )
+    }
+}
+
 /// Whether a new triangle of `kids` would cross a leaf triangle near it that shares
 /// none of its vertices (an inserted point must not make the mesh pass through itself).
-fn crosses_leaves(pts: &[DVec3], tris: &[[u32; 3]], leaves: &[u32], kids: &[[u32; 3]]) -> bool {
+/// A crossing that a replaced triangle of `parents` already has (with a leaf sharing no
+/// vertex with it) is not new and does not count: the new triangles lie within the
+/// height bound of the old ones, and a fold left by growth must not keep the points
+/// under it refused.
+fn crosses_leaves(
+    pts: &[DVec3],
+    tris: &[[u32; 3]],
+    leaves: &[u32],
+    kids: &[[u32; 3]],
+    parents: &[u32],
+) -> bool {
+    let tri = |t: [u32; 3]| t.map(|i| pts[i as usize]);
     kids.iter().any(|k| {
-        let q = k.map(|i| pts[i as usize]);
+        let q = tri(*k);
         leaves.iter().any(|&g| {
             let t = tris[g as usize];
-            !t.iter().any(|v| k.contains(v)) && tri_tri_intersect(&q, &t.map(|i| pts[i as usize]))
+            !t.iter().any(|v| k.contains(v))
+                && tri_tri_intersect(&q, &tri(t))
+                && !parents.iter().any(|&f| {
+                    let pt = tris[f as usize];
+                    !t.iter().any(|v| pt.contains(v)) && tri_tri_intersect(&tri(pt), &tri(t))
+                })
         })
     })
 }
 
-/// The leaf triangle among `leaves` that `p` projects into within the height bound,
-/// the lowest first (ties to the lower id).
-fn best_face(
-    pts: &[DVec3],
-    tris: &[[u32; 3]],
-    leaves: &[u32],
-    p: DVec3,
-    bound: CoverBound,
-) -> Option<u32> {
-    let mut best: Option<(f64, u32)> = None;
-    for &f in leaves {
-        if let Some((h, lmax)) = covers(pts, tris[f as usize], p)
-            && h <= bound.h_abs.max(bound.h_rel * lmax)
-            && best.is_none_or(|(bh, _)| h < bh)
-        {
-            best = Some((h, f));
-        }
-    }
-    best.map(|(_, f)| f)
+/// Height bound of an insertion next to a triangle or edge of longest length `lmax`:
+/// the I12 bound max(`h_abs`, `h_rel` x `lmax`), or the point's own plane band where
+/// that is wider (a crease vertex above the chamfer growth cut under it), at most
+/// `lmax`.
+fn height_bound(bound: CoverBound, band: f64, lmax: f64) -> f64 {
+    bound.h_abs.max(bound.h_rel * lmax).max(band.min(lmax))
 }
 
-/// The interior edge `u -> v` of leaf `f` (twin leaf `g` holds `v -> u`) that `p`
-/// projects onto strictly between its ends, nearest to `p` within the height bound.
-fn best_edge(
+/// Appends a [`Split`] in three of every leaf of `leaves` that `p` projects into within
+/// [`height_bound`].
+fn face_splits(
     pts: &[DVec3],
     tris: &[[u32; 3]],
     leaves: &[u32],
     p: DVec3,
     bound: CoverBound,
-) -> Option<(u32, u32, u32, u32)> {
-    let mut best: Option<(f64, u32, u32, u32)> = None;
+    band: f64,
+    out: &mut Vec<Split>,
+) {
+    for &f in leaves {
+        if let Some((h, lmax)) = covers(pts, tris[f as usize], p)
+            && h <= height_bound(bound, band, lmax)
+        {
+            out.push(Split {
+                h,
+                f,
+                g: NONE,
+                u: NONE,
+                v: NONE,
+            });
+        }
+    }
+}
+
+/// Appends a [`Split`] of every interior edge `u -> v` of a leaf `f` (twin leaf `g`
+/// holds `v -> u`) that `p` projects onto strictly between its ends within
+/// [`height_bound`] (by the edge's length).
+fn edge_splits(
+    pts: &[DVec3],
+    tris: &[[u32; 3]],
+    leaves: &[u32],
+    p: DVec3,
+    bound: CoverBound,
+    band: f64,
+    out: &mut Vec<Split>,
+) {
     for &f in leaves {
         let t = tris[f as usize];
         for k in 0..3 {
@@ -441,17 +566,21 @@ fn best_edge(
                 continue;
             }
             let d = p.distance(pu + s * e);
-            if d <= bound.h_abs.max(bound.h_rel * ll.sqrt()) && best.is_none_or(|b| d < b.0) {
-                best = Some((d, f, u, v));
+            if d > height_bound(bound, band, ll.sqrt()) {
+                continue;
+            }
+            let twin = leaves.iter().copied().find(|&g| {
+                let t = tris[g as usize];
+                (0..3).any(|k| t[k] == v && t[(k + 1) % 3] == u)
+            });
+            // Each interior edge once: from the leaf that holds it as u < v.
+            if let Some(g) = twin
+                && u < v
+            {
+                out.push(Split { h: d, f, g, u, v });
             }
         }
     }
-    let (_, f, u, v) = best?;
-    let g = leaves.iter().copied().find(|&g| {
-        let t = tris[g as usize];
-        (0..3).any(|k| t[k] == v && t[(k + 1) % 3] == u)
-    })?;
-    Some((f, g, u, v))
 }
 
 /// The vertex of triangle `t` other than `u`, `v`.
@@ -556,5 +685,54 @@ impl VertexFaces {
     /// The faces around vertex `v`.
     pub(super) fn of(&self, v: u32) -> &[u32] {
         &self.faces[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bound(quadric: bool) -> CoverBound {
+        CoverBound {
+            h_abs: 0.5,
+            h_rel: 0.25,
+            radius: 4.0,
+            plane_radius: 2.5,
+            plane_abs: 0.1,
+            plane_rel: 3.0,
+            quadric,
+        }
+    }
+
+    /// Twelve points of the paraboloid z = 0.15 (x² + y²) on two rings (spacing ~1), a
+    /// curved patch whose plane residual is mostly curvature.
+    fn paraboloid() -> Vec<DVec3> {
+        let z = |x: f64, y: f64| 0.15 * (x * x + y * y);
+        (0..12)
+            .map(|i| {
+                let r = if i % 2 == 0 { 1.0 } else { 2.0 };
+                let a = i as f64 * std::f64::consts::TAU / 12.0;
+                let (x, y) = (r * a.cos(), r * a.sin());
+                DVec3::new(x, y, z(x, y))
+            })
+            .collect()
+    }
+
+    /// A point on the paraboloid beyond its neighbours lies off their plane by more than
+    /// the plane's band but on their quadric; the same point 0.3 above (an outlier) lies
+    /// on neither.
+    #[test]
+    fn quadric_test_takes_curved_surface_points_not_outliers() {
+        let q = paraboloid();
+        let cov = covariance(&q, None).unwrap();
+        let eig = sym_eigen3_smallest(cov.matrix).unwrap();
+        let rms = eig.values[0].sqrt();
+        let on = DVec3::new(2.8, 0.5, 0.15 * (2.8f64 * 2.8 + 0.25));
+        let h = (on - cov.centroid).dot(eig.vector).abs();
+        assert!(h > 0.1f64.max(3.0 * rms), "h {h}, rms {rms}");
+        let b = bound(true);
+        assert!(on_local_quadric(&q, cov.centroid, eig.vector, on, &b));
+        let off = on + DVec3::Z * 0.3;
+        assert!(!on_local_quadric(&q, cov.centroid, eig.vector, off, &b));
     }
 }

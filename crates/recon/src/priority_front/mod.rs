@@ -566,6 +566,7 @@ fn insert_phase(
                 plane_radius: 2.5 * rho,
                 plane_abs: p.insert_height * rho,
                 plane_rel: p.insert_rel,
+                quadric: p.insert_quadric,
             },
         )
     })
@@ -633,7 +634,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} insert:{},plane_h<=max({}rho,{}rms) threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -672,6 +673,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.insert_covered,
         p.insert_height,
         p.insert_rel,
+        p.insert_quadric,
         p.threads
     )
 }

@@ -210,6 +210,11 @@ pub struct PriorityFrontParams {
     pub insert_height: f64,
     /// I15: relative part of that bound, in RMS residuals of the neighbours (default 3).
     pub insert_rel: f64,
+    /// I15: a point off that plane passes when it lies on the least-squares quadric of
+    /// the same neighbours within the same bound (by the fit's residual standard error):
+    /// surface points on curved patches, whose plane residual is mostly curvature.
+    /// false = the plane test alone. Default true.
+    pub insert_quadric: bool,
     /// Multi-seed restart while Free point patches remain (spec M8; default true).
     pub restart: bool,
     /// Minimum size of a Free point patch (R-graph component) that triggers a restart
@@ -289,6 +294,7 @@ impl Default for PriorityFrontParams {
             insert_covered: true,
             insert_height: 0.1,
             insert_rel: 3.0,
+            insert_quadric: true,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -667,6 +673,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "insert_rel",
         Unit::None,
         "I15: ... or within this many RMS residuals of the neighbours from that plane (3)",
+    ),
+    ParamDoc::new(
+        "insert_quadric",
+        Unit::Flag,
+        "I15: a point off that plane may lie on the neighbours' quadric instead (true)",
     ),
     ParamDoc::new(
         "restart",
