@@ -169,6 +169,104 @@ fn print_detail(mesh: &reconbench_geom::TriMesh, topo: &reconbench_geom::topolog
             l.edges, l.length, l.component
         );
     }
+    // Where each piece lies: union-find over face corners, then per root the centroid
+    // and box of its vertices and the centroid of its boundary vertices.
+    let mut parent: Vec<u32> = (0..v.len() as u32).collect();
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    for f in mesh.faces() {
+        let r = find(&mut parent, f[0]);
+        for &x in &f[1..] {
+            let q = find(&mut parent, x);
+            parent[q as usize] = r;
+        }
+    }
+    let mut pieces = std::collections::BTreeMap::<
+        u32,
+        (
+            usize,
+            glam::DVec3,
+            glam::DVec3,
+            glam::DVec3,
+            glam::DVec3,
+            usize,
+        ),
+    >::new();
+    let mut seen = vec![false; v.len()];
+    for f in mesh.faces() {
+        for &x in f {
+            if std::mem::replace(&mut seen[x as usize], true) {
+                continue;
+            }
+            let r = find(&mut parent, x);
+            let e = pieces.entry(r).or_insert((
+                0,
+                glam::DVec3::ZERO,
+                glam::DVec3::splat(f64::MAX),
+                glam::DVec3::splat(f64::MIN),
+                glam::DVec3::ZERO,
+                0,
+            ));
+            e.0 += 1;
+            e.1 += v[x as usize];
+            e.2 = e.2.min(v[x as usize]);
+            e.3 = e.3.max(v[x as usize]);
+        }
+    }
+    for ((a, b), c) in &count {
+        if *c == 1 {
+            for x in [*a, *b] {
+                let r = find(&mut parent, x);
+                if let Some(e) = pieces.get_mut(&r) {
+                    e.4 += v[x as usize];
+                    e.5 += 1;
+                }
+            }
+        }
+    }
+    // Distance of each small piece's vertices from the largest piece's faces.
+    let big = pieces.iter().max_by_key(|(_, e)| e.0).map(|(r, _)| *r);
+    let big_faces: Vec<[u32; 3]> = mesh
+        .faces()
+        .iter()
+        .filter(|f| Some(find(&mut parent, f[0])) == big)
+        .copied()
+        .collect();
+    let big_mesh = reconbench_geom::TriMesh::new(v.to_vec(), big_faces).expect("mesh");
+    let bvh = reconbench_geom::spatial::MeshBvh::new(&big_mesh).expect("bvh");
+    let mut far = std::collections::BTreeMap::<u32, f64>::new();
+    for (x, &s) in seen.iter().enumerate() {
+        let r = find(&mut parent, x as u32);
+        if s && Some(r) != big && pieces[&r].0 < 200 {
+            let d = bvh.distance(v[x]).expect("distance");
+            let e = far.entry(r).or_insert(0.0);
+            *e = e.max(d);
+        }
+    }
+    for (r, d) in &far {
+        println!(
+            "  small piece {r}: {} vertices, farthest {d:.5} from the largest piece",
+            pieces[r].0
+        );
+    }
+    for (n, c, lo, hi, bs, bn) in pieces.values() {
+        println!(
+            "  piece: {n} vertices, centroid {:.4?}, box {:.4?}..{:.4?}, boundary centroid {:.4?}",
+            *c / *n as f64,
+            lo,
+            hi,
+            if *bn > 0 {
+                *bs / *bn as f64
+            } else {
+                glam::DVec3::NAN
+            }
+        );
+    }
     let bnd: Vec<glam::DVec3> = count
         .iter()
         .filter(|(_, c)| **c == 1)

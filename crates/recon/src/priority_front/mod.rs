@@ -38,6 +38,7 @@ pub mod params;
 mod peel;
 mod run;
 mod seed;
+mod strays;
 mod triangulate;
 
 use std::time::Instant;
@@ -192,6 +193,17 @@ impl PriorityFront {
             stitch_phase(&lay, cfg.clone(), &dcfg, &mut outs, &mut rng, ctx)?
         };
         let grow_secs = t_grow.elapsed().as_secs_f64();
+        let strays = ctx.phase("strays", || {
+            strays::dissolve_stray_pieces(
+                &lay.pts,
+                &mut grown.tris,
+                &mut grown.state,
+                &mut grown.loops,
+                p.stray_piece_max,
+                r0,
+            )
+        });
+        num(&mut diag, "stray_pieces", strays as f64);
         let peeled = peel_phase(&mut grown, &lay, &cfg, p, ctx);
         num(&mut diag, "holes_peeled", peeled as f64);
         let inserted = insert_phase(&mut grown, &lay, p, rho, ctx);
@@ -634,7 +646,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} I18=strays<={} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -670,6 +682,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.fill_holes_max_loop,
         p.fill_holes_dp,
         p.fill_holes_peel,
+        p.stray_piece_max,
         p.insert_covered,
         p.insert_height,
         p.insert_rel,

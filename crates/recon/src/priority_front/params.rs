@@ -200,6 +200,11 @@ pub struct PriorityFrontParams {
     /// faces within 1, 2, ... up to this many edge steps of it, and the enlarged loop
     /// is filled; where that fails too, the faces are put back. 0 = off. Default 2.
     pub fill_holes_peel: usize,
+    /// IMPL-CHOICE I18: after growth, a piece (component) of at most this many vertices
+    /// whose vertices all lie within R of the larger pieces is taken apart and its
+    /// points freed for the completion (restart seeds grow such pieces over finished
+    /// mesh). 0 = off (the paper). Default 20.
+    pub stray_piece_max: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
     /// projects into a triangle within the I12 height bound of it (a covered point) is
     /// inserted there. false = the paper (such points are refused). Default true.
@@ -295,6 +300,7 @@ impl Default for PriorityFrontParams {
             insert_height: 0.1,
             insert_rel: 3.0,
             insert_quadric: true,
+            stray_piece_max: 20,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -411,6 +417,12 @@ impl PriorityFrontParams {
             return Err(bad(
                 "support_share",
                 format!("must be in (0, 1], got {}", self.support_share),
+            ));
+        }
+        if self.stray_piece_max > 1_000_000 {
+            return Err(bad(
+                "stray_piece_max",
+                format!("must be at most 1000000, got {}", self.stray_piece_max),
             ));
         }
         if self.close_holes_max > 1_000_000 {
@@ -673,6 +685,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "insert_rel",
         Unit::None,
         "I15: ... or within this many RMS residuals of the neighbours from that plane (3)",
+    ),
+    ParamDoc::new(
+        "stray_piece_max",
+        Unit::Count,
+        "I18: free the points of pieces of at most this many vertices lying within R of larger pieces (20)",
     ),
     ParamDoc::new(
         "insert_quadric",
