@@ -115,20 +115,26 @@ fn fandisk_vertices_are_one_genus_zero_piece_with_crease_points_meshed() {
 }
 
 /// 3holes (3,596 vertices, genus 3, closed; nearly uniform vertex spacing: mesh edges
-/// at most 2.1 ρ): watertight with genus 3 in one piece for three seeds, and no vertex
-/// refused (11-16 before IMPL-CHOICE I15 inserted the covered points, 25-26 without
-/// `reject_free_inside`; they lie under a neighbouring triangle).
+/// at most 2.1 ρ): watertight with genus 3 in one piece for three seeds on one and two
+/// threads, and no vertex refused (11-16 before IMPL-CHOICE I15 inserted the covered
+/// points, 25-26 without `reject_free_inside`; they lie under a neighbouring triangle).
 #[test]
 fn three_holes_vertices_are_watertight_genus_three() {
     let mesh = real("3holes");
-    for seed in [1, 2, 3] {
-        let rec = run(mesh.vertices().to_vec(), 1, seed);
-        let t = analyze(&rec.mesh);
-        assert_manifold_oriented(&t);
-        assert!(t.watertight, "seed {seed}: {t:?}");
-        assert_eq!(t.components, 1, "seed {seed}");
-        assert_eq!(t.genus, Some(3), "seed {seed}");
-        assert_eq!(refused_on_surface(&mesh, &rec), 0, "seed {seed}");
+    for threads in [1, 2] {
+        for seed in [1, 2, 3] {
+            let rec = run(mesh.vertices().to_vec(), threads, seed);
+            let t = analyze(&rec.mesh);
+            assert_manifold_oriented(&t);
+            assert!(t.watertight, "threads {threads} seed {seed}: {t:?}");
+            assert_eq!(t.components, 1, "threads {threads} seed {seed}");
+            assert_eq!(t.genus, Some(3), "threads {threads} seed {seed}");
+            assert_eq!(
+                refused_on_surface(&mesh, &rec),
+                0,
+                "threads {threads} seed {seed}"
+            );
+        }
     }
 }
 
@@ -273,33 +279,32 @@ fn very_close_parallel_sheets_have_genus_zero() {
 // Measured states below: default parameters, seeds 1-3.
 
 #[test]
-#[ignore = "issue 20 open: genus 0, 1 component, but 2-4 loops and 3-26 refused"]
+#[ignore = "issue 20 open: genus 0, 1 component, 0-1 refused, but 2-4 loops"]
 fn fandisk_vertices_issue_20_target() {
     assert_issue_20_target("fandisk", 0, 0, 1);
 }
 
 #[test]
-#[ignore = "issue 20 open: genus 1, 1 component, watertight, but 7-13 refused"]
+#[ignore = "issue 20 open: genus 1, 1 component, watertight, but 1-2 crease vertices refused"]
 fn rocker_arm_vertices_issue_20_target() {
     assert_issue_20_target("rocker-arm", 1, 0, 1);
 }
 
 #[test]
-#[ignore = "issue 20 open: genus 3-4, 1-3 components, 7-9 loops, 23-39 refused"]
+#[ignore = "issue 20 open: 1 component, but genus 4 and 3 loops on seed 1, 0-2 refused"]
 fn mechpart_vertices_issue_20_target() {
     assert_issue_20_target("mechpart", 3, 0, 1);
 }
 
 #[test]
-#[ignore = "issue 20 open: genus 0, 2-3 components, 5-8 loops, 12-27 refused"]
+#[ignore = "issue 20 open: genus 0, but the shaft a second piece, 2 loops, 1-8 refused"]
 fn golf_club_vertices_issue_20_target() {
     assert_issue_20_target("golf-club", 0, 1, 1);
 }
 
 #[test]
-#[ignore = "issue 20 open: 3holes one 4-edge loop on seed 3; bunny genus 0-1, 1-3 components, 1-7 loops, 8-22 refused"]
+#[ignore = "issue 20 open: bunny seed 2 genus 1 with a 33-edge loop, 0-5 refused"]
 fn two_threads_issue_20_target() {
-    assert_issue_20_target("3holes", 3, 0, 2);
     assert_issue_20_target("bunny", 0, 5, 2);
 }
 

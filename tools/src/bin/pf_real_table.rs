@@ -163,6 +163,31 @@ fn print_detail(mesh: &reconbench_geom::TriMesh, topo: &reconbench_geom::topolog
             *count.entry((a.min(b), a.max(b))).or_default() += 1;
         }
     }
+    // Interior edges whose two faces fold back onto each other (over 160 degrees).
+    let mut edge_faces = std::collections::HashMap::<(u32, u32), Vec<usize>>::new();
+    for (fi, f) in mesh.faces().iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            edge_faces.entry((a.min(b), a.max(b))).or_default().push(fi);
+        }
+    }
+    let nrm = |f: [u32; 3]| {
+        let [a, b, c] = f.map(|i| v[i as usize]);
+        (b - a).cross(c - a).normalize_or_zero()
+    };
+    let folds: Vec<glam::DVec3> = edge_faces
+        .iter()
+        .filter(|(_, fs)| fs.len() == 2)
+        .filter(|(_, fs)| nrm(mesh.faces()[fs[0]]).dot(nrm(mesh.faces()[fs[1]])) < -0.94)
+        .map(|((a, b), _)| (v[*a as usize] + v[*b as usize]) * 0.5)
+        .collect();
+    if !folds.is_empty() {
+        let c = folds.iter().sum::<glam::DVec3>() / folds.len() as f64;
+        println!(
+            "  fold edges (> 160 degrees): {}, centroid {c:.4?}",
+            folds.len()
+        );
+    }
     for l in &topo.boundary_loops {
         println!(
             "  loop: {} edges, length {:.4}, component {}",

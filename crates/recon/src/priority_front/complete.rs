@@ -15,7 +15,8 @@
 //!    of `fill_dp.rs` under the same bounds (`fill_holes_dp`).
 //! 2. [`insert_covered`]: every point left unmeshed that lies on the surface of its
 //!    meshed neighbours (their plane, or their quadric on a curved patch: `insert_height`,
-//!    `insert_rel`, `insert_quadric`; so that outliers near the surface stay refused) and
+//!    `insert_rel`, `insert_quadric`; or the crease line of two mesh triangles near it;
+//!    so that outliers near the surface stay refused) and
 //!    projects into a triangle within the I12 height bound of it (the definition of a
 //!    covered point; up to the neighbours' own band beside a crease, where growth cut
 //!    the corner under a crease vertex) is inserted there: the triangle is split in
@@ -27,7 +28,7 @@
 
 use glam::DVec3;
 use reconbench_geom::linalg::{covariance, sym_eigen3_smallest, weighted_least_squares};
-use reconbench_geom::spatial::tri_tri_intersect;
+use reconbench_geom::spatial::{closest_point_on_triangle, tri_tri_intersect};
 
 use super::grid::{Grid, NONE};
 use super::mesher::{ACCEPTED, Mesher, tri_normal};
@@ -377,46 +378,52 @@ pub(crate) fn insert_covered(
     let mut inserted = 0;
     for &p in &todo {
         let pp = pts[p as usize];
-        let Some(band) = local_plane_band(pts, state, grid, p, &bound, &mut nb) else {
-            continue;
-        };
-        near.clear();
-        grid.for_cells(pp, reach, |range| {
-            for v in range {
-                if v < n && state[v] == ACCEPTED && pts[v].distance_squared(pp) <= reach * reach {
-                    near.push(v as u32);
+        // NaN until decided: a point off its neighbours' plane and quadric may still lie
+        // on a crease or corner of the mesh (`on_feature_planes`, decided on the
+        // triangles near it), where it may stand up to a triangle's longest edge above
+        // the chamfer growth cut under it.
+        let mut band = local_plane_band(pts, state, grid, p, &bound, &mut nb).unwrap_or(f64::NAN);
+        // Corners within R first; the wider reach only for a point that no triangle or
+        // edge near it can take.
+        let mut done = false;
+        let radii = [bound.radius, reach];
+        for &r in &radii[..if reach > bound.radius { 2 } else { 1 }] {
+            if done {
+                break;
+            }
+            near.clear();
+            grid.for_cells(pp, r, |range| {
+                for v in range {
+                    if v < n && state[v] == ACCEPTED && pts[v].distance_squared(pp) <= r * r {
+                        near.push(v as u32);
+                    }
+                }
+            });
+            leaves.clear();
+            for &v in &near {
+                for &f in vf.of(v) {
+                    tree.leaves_under(f, &mut leaves);
                 }
             }
-        });
-        leaves.clear();
-        for &v in &near {
-            for &f in vf.of(v) {
-                tree.leaves_under(f, &mut leaves);
+            leaves.sort_unstable();
+            leaves.dedup();
+            if band.is_nan() {
+                if !on_feature_planes(pts, tris, &leaves, pp, bound.plane_abs) {
+                    continue;
+                }
+                band = f64::INFINITY;
+            }
+            // Faces first (lowest first), then, where none can take the point, edges
+            // (nearest first).
+            cands.clear();
+            face_splits(pts, tris, &leaves, pp, bound, band, &mut cands);
+            done = try_splits(pts, tris, &mut tree, &leaves, &mut cands, p);
+            if !done {
+                cands.clear();
+                edge_splits(pts, tris, &leaves, pp, bound, band, &mut cands);
+                done = try_splits(pts, tris, &mut tree, &leaves, &mut cands, p);
             }
         }
-        leaves.sort_unstable();
-        leaves.dedup();
-        cands.clear();
-        face_splits(pts, tris, &leaves, pp, bound, band, &mut cands);
-        let n_faces = cands.len();
-        edge_splits(pts, tris, &leaves, pp, bound, band, &mut cands);
-        // Faces first (lowest first), then edges (nearest first).
-        cands[..n_faces].sort_unstable_by(|a, b| a.h.total_cmp(&b.h).then(a.f.cmp(&b.f)));
-        cands[n_faces..].sort_unstable_by(|a, b| a.h.total_cmp(&b.h).then(a.f.cmp(&b.f)));
-        let done = cands.iter().any(|c| {
-            let (kids, parents) = c.kids(tris, p);
-            if crosses_leaves(pts, tris, &leaves, &kids, &parents) {
-                return false;
-            }
-            match c.g {
-                NONE => tree.split(tris, c.f, &kids),
-                g => {
-                    tree.split(tris, c.f, &kids[..2]);
-                    tree.split(tris, g, &kids[2..]);
-                }
-            }
-            true
-        });
         if done {
             state[p as usize] = ACCEPTED;
             inserted += 1;
@@ -431,6 +438,64 @@ pub(crate) fn insert_covered(
         *tris = out.iter().map(|&f| tris[f as usize]).collect();
     }
     inserted
+}
+
+/// Sorts `cands` lowest first and takes the first whose new triangles make no new
+/// crossing with `leaves`: splits it in `tree` / `tris` with point `p`. Returns whether
+/// one was taken.
+fn try_splits(
+    pts: &[DVec3],
+    tris: &mut Vec<[u32; 3]>,
+    tree: &mut SplitTree,
+    leaves: &[u32],
+    cands: &mut [Split],
+    p: u32,
+) -> bool {
+    cands.sort_unstable_by(|a, b| a.h.total_cmp(&b.h).then(a.f.cmp(&b.f)));
+    for c in cands.iter() {
+        let (kids, parents) = c.kids(tris, p);
+        if crosses_leaves(pts, tris, leaves, &kids, &parents) {
+            continue;
+        }
+        match c.g {
+            NONE => tree.split(tris, c.f, &kids),
+            g => {
+                tree.split(tris, c.f, &kids[..2]);
+                tree.split(tris, g, &kids[2..]);
+            }
+        }
+        return true;
+    }
+    false
+}
+
+/// Cosine of the smallest angle between the normals of two triangles whose planes meet
+/// at a crease or corner (30 degrees).
+const COS_FEATURE: f64 = 0.866;
+
+/// Whether `p` lies, within `tol`, on the planes of two triangles of `leaves` whose
+/// normals differ by more than 30 degrees, and within each one's longest edge of it:
+/// on the crease line where two flat sides of the
+/// mesh meet (or a corner of three), which growth cut with a chamfer. Points off such a
+/// line, outliers among them, fail: two bands of width 2 `tol` meet in a thin prism.
+fn on_feature_planes(pts: &[DVec3], tris: &[[u32; 3]], leaves: &[u32], p: DVec3, tol: f64) -> bool {
+    let mut on: Vec<DVec3> = Vec::new();
+    for &f in leaves {
+        let [a, b, c] = tris[f as usize].map(|i| pts[i as usize]);
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        if n == DVec3::ZERO || (p - a).dot(n).abs() > tol {
+            continue;
+        }
+        let lmax = a.distance(b).max(b.distance(c)).max(c.distance(a));
+        if p.distance(closest_point_on_triangle(p, a, b, c)) > lmax {
+            continue;
+        }
+        if on.iter().any(|m| m.dot(n) < COS_FEATURE) {
+            return true;
+        }
+        on.push(n);
+    }
+    false
 }
 
 /// How far from a point the corners of a triangle it projects into can lie: the corner
@@ -716,6 +781,34 @@ mod tests {
                 DVec3::new(x, y, z(x, y))
             })
             .collect()
+    }
+
+    /// A ridge of two triangles at 90 degrees (along the x axis, the roof's faces
+    /// x-y and x-z), and a flat third triangle in the x-y plane.
+    fn ridge() -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        let pts = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(3.0, 1.0, 0.0),
+        ];
+        (pts, vec![[0, 1, 2], [1, 0, 3], [1, 4, 2]])
+    }
+
+    /// A point on the crease line of two triangles lies on both planes; one beside it
+    /// lies on one plane only, one above it on none; two coplanar triangles make no
+    /// crease.
+    #[test]
+    fn feature_planes_take_crease_points_only() {
+        let (pts, tris) = ridge();
+        let all = [0, 1, 2];
+        let on = |p: DVec3, leaves: &[u32]| on_feature_planes(&pts, &tris, leaves, p, 0.05);
+        assert!(on(DVec3::new(2.5, 0.0, 0.0), &all));
+        assert!(on(DVec3::new(2.5, 0.03, -0.03), &all));
+        assert!(!on(DVec3::new(2.5, 0.3, 0.0), &all));
+        assert!(!on(DVec3::new(2.5, -0.2, 0.2), &all));
+        assert!(!on(DVec3::new(2.5, 0.0, 0.0), &[0, 2]));
     }
 
     /// A point on the paraboloid beyond its neighbours lies off their plane by more than
