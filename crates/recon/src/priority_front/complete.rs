@@ -474,10 +474,12 @@ fn try_splits(
 const COS_FEATURE: f64 = 0.866;
 
 /// Whether `p` lies, within `tol`, on the planes of two triangles of `leaves` whose
-/// normals differ by more than 30 degrees, and within each one's longest edge of it:
-/// on the crease line where two flat sides of the
-/// mesh meet (or a corner of three), which growth cut with a chamfer. Points off such a
-/// line, outliers among them, fail: two bands of width 2 `tol` meet in a thin prism.
+/// normals differ by more than 30 degrees, each within its longest edge of `p`: on the
+/// crease line where two flat sides of the mesh meet (or a corner of three), which
+/// growth cut with a chamfer (IMPL-CHOICE I15). Points off such a line, outliers among
+/// them, fail: two bands of width 2 `tol` meet in a thin prism. Twice the longest edge
+/// let in 2 % of `li_outliers`' torus outliers (planes of triangles far apart on a
+/// curved surface meet near it).
 fn on_feature_planes(pts: &[DVec3], tris: &[[u32; 3]], leaves: &[u32], p: DVec3, tol: f64) -> bool {
     let mut on: Vec<DVec3> = Vec::new();
     for &f in leaves {
@@ -500,7 +502,8 @@ fn on_feature_planes(pts: &[DVec3], tris: &[[u32; 3]], leaves: &[u32], p: DVec3,
 
 /// How far from a point the corners of a triangle it projects into can lie: the corner
 /// search radius R, or the mesh's longest edge where that is longer (sparse CAD regions
-/// have triangles of several R), at most 3 R.
+/// have triangles of several R), at most 3 R (IMPL-CHOICE I15; the cap bounds the
+/// search on meshes with a few very long edges).
 fn corner_reach(pts: &[DVec3], tris: &[[u32; 3]], radius: f64) -> f64 {
     let longest = tris
         .iter()
