@@ -9,11 +9,13 @@
 //! Environment: `PF_THREADS` (comma list, default `1,2`), `PF_SEEDS` (comma list,
 //! default `1,2,3`), `RECON_PARAMS` (JSON parameters; `threads` is overridden),
 //! `PF_NOSELF` (skip the self-intersection count, which dominates the probe's time),
-//! `PF_DETAIL` (also print each component's faces, genus and loops, and each boundary
-//! loop's edges, length and centroid), `PF_REFUSED` (each refused on-surface point: its
+//! `PF_DETAIL` (also print each component's faces, genus and loops, where each piece
+//! lies, how far the small pieces are from the largest, the fold edges over 160
+//! degrees, and each boundary loop's edges, length and centroid), `PF_REFUSED` (each refused on-surface point: its
 //! distance to the output mesh and to the nearest output vertex in rho, whether the
 //! output's nearest point is inside a face, boundary vertices within 3 rho, and the
-//! largest angle between the reference normals of its faces).
+//! largest angle between the reference normals of its faces), `PF_SEAM` (where the faces
+//! that point against the reference normals meet the others).
 
 use reconbench_geom::PointCloud;
 use reconbench_geom::method::{Reconstructor, RunCtx};
@@ -98,6 +100,9 @@ fn main() {
                     "-".to_string()
                 };
                 let reversed = reversed_faces(&rec.mesh, &truth_normals);
+                if std::env::var("PF_SEAM").is_ok() {
+                    print_seam(&rec.mesh, &truth_normals);
+                }
                 println!(
                     "{name} {t} {s} | {} {} {} {} | {} {on} | {pairs} | {} {reversed} {secs:.3}",
                     topo.genus.map_or("-".to_string(), |g| g.to_string()),
@@ -374,4 +379,54 @@ fn print_refused(
             dv / rho
         );
     }
+}
+
+/// Where the faces pointing against the reference normals meet the others (`PF_SEAM`):
+/// the count of their edges shared with a face that points the right way, binned by
+/// the cosine between the two faces' normals, and their boundary edges.
+fn print_seam(mesh: &reconbench_geom::TriMesh, truth: &[glam::DVec3]) {
+    let v = mesh.vertices();
+    let f = mesh.faces();
+    let nrm = |t: [u32; 3]| {
+        let [a, b, c] = t.map(|i| v[i as usize]);
+        (b - a).cross(c - a).normalize_or_zero()
+    };
+    let rev: Vec<bool> = f
+        .iter()
+        .map(|t| nrm(*t).dot(t.iter().map(|&i| truth[i as usize]).sum()) < 0.0)
+        .collect();
+    let mut edge = std::collections::HashMap::<(u32, u32), Vec<usize>>::new();
+    for (i, t) in f.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edge.entry((a.min(b), a.max(b))).or_default().push(i);
+        }
+    }
+    let mut bins = [0usize; 5];
+    let mut open = 0;
+    for fs in edge.values() {
+        match fs.as_slice() {
+            [x] if rev[*x] => open += 1,
+            [x, y] if rev[*x] != rev[*y] => {
+                let c = nrm(f[*x]).dot(nrm(f[*y]));
+                let b = if c < -0.9 {
+                    0
+                } else if c < -0.5 {
+                    1
+                } else if c < 0.0 {
+                    2
+                } else if c < 0.5 {
+                    3
+                } else {
+                    4
+                };
+                bins[b] += 1;
+            }
+            _ => {}
+        }
+    }
+    println!(
+        "  seam: reversed faces {}, their boundary edges {open}, edges to right faces by normal cosine [<-0.9, <-0.5, <0, <0.5, >=0.5]: {bins:?}",
+        rev.iter().filter(|&&r| r).count()
+    );
 }
