@@ -206,8 +206,10 @@ pub struct PriorityFrontParams {
     /// mesh). 0 = off (the paper). Default 20.
     pub stray_piece_max: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
-    /// projects into a triangle within the I12 height bound of it (a covered point) is
-    /// inserted there. false = the paper (such points are refused). Default true.
+    /// lies on its meshed neighbours' surface and projects into a triangle within the
+    /// I12 height bound of it (a covered point; further above a chamfer for a crease
+    /// vertex) is inserted there. false = the paper (such points are refused). Default
+    /// true.
     pub insert_covered: bool,
     /// I15: a covered point is inserted only when it lies within max(`insert_height`
     /// rho, `insert_rel` x their RMS residual) of the least-squares plane of its 12
