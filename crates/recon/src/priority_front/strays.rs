@@ -15,6 +15,7 @@ use reconbench_geom::TriMesh;
 use reconbench_geom::spatial::MeshBvh;
 
 use super::mesher::FREE;
+use crate::hc_it::cluster::UnionFind;
 
 /// Removes every piece (component by shared vertices) of at most `max_vertices`
 /// vertices whose vertices all lie within `max_dist` of the faces of the pieces larger
@@ -31,25 +32,23 @@ pub(super) fn dissolve_stray_pieces(
     if max_vertices == 0 || tris.is_empty() {
         return 0;
     }
-    let mut root = Roots::new(pts.len());
+    let mut root = UnionFind::new(pts.len());
     for t in tris.iter() {
         root.union(t[0], t[1]);
         root.union(t[0], t[2]);
     }
-    // Vertices per piece, counted once each.
-    let mut size = vec![0u32; pts.len()];
     let mut used = vec![false; pts.len()];
     for &v in tris.iter().flatten() {
-        if !std::mem::replace(&mut used[v as usize], true) {
-            size[root.find(v) as usize] += 1;
-        }
+        used[v as usize] = true;
     }
-    let small = |root: &mut Roots, size: &[u32], v: u32| {
-        size[root.find(v) as usize] as usize <= max_vertices
+    // A set's size is its piece's vertex count (points without a face stay singletons).
+    let small = |root: &mut UnionFind, v: u32| {
+        let r = root.find(v);
+        root.size(r) as usize <= max_vertices
     };
     let host: Vec<[u32; 3]> = tris
         .iter()
-        .filter(|t| !small(&mut root, &size, t[0]))
+        .filter(|t| !small(&mut root, t[0]))
         .copied()
         .collect();
     if host.is_empty() || host.len() == tris.len() {
@@ -61,7 +60,7 @@ pub(super) fn dissolve_stray_pieces(
     // A small piece stays when any of its vertices lies farther than `max_dist`.
     let mut keep = vec![false; pts.len()];
     for v in 0..pts.len() as u32 {
-        if used[v as usize] && small(&mut root, &size, v) {
+        if used[v as usize] && small(&mut root, v) {
             let near = bvh.distance(pts[v as usize]).is_ok_and(|d| d <= max_dist);
             if !near {
                 keep[root.find(v) as usize] = true;
@@ -72,7 +71,7 @@ pub(super) fn dissolve_stray_pieces(
     let mut pieces = 0;
     for v in 0..pts.len() as u32 {
         let r = root.find(v);
-        if used[v as usize] && small(&mut root, &size, v) && !keep[r as usize] {
+        if used[v as usize] && small(&mut root, v) && !keep[r as usize] {
             gone[v as usize] = true;
             if r == v {
                 pieces += 1;
@@ -90,31 +89,6 @@ pub(super) fn dissolve_stray_pieces(
         }
     }
     pieces
-}
-
-/// Union-find over point indices (path halving, union by index).
-struct Roots(Vec<u32>);
-
-impl Roots {
-    fn new(n: usize) -> Self {
-        Self((0..n as u32).collect())
-    }
-
-    fn find(&mut self, mut x: u32) -> u32 {
-        while self.0[x as usize] != x {
-            let up = self.0[self.0[x as usize] as usize];
-            self.0[x as usize] = up;
-            x = up;
-        }
-        x
-    }
-
-    fn union(&mut self, a: u32, b: u32) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.0[ra.max(rb) as usize] = ra.min(rb);
-        }
-    }
 }
 
 #[cfg(test)]
