@@ -31,6 +31,7 @@ mod density;
 mod fill_dp;
 mod grid;
 mod holes;
+mod inside_out;
 mod mesher;
 mod orient;
 mod parallel;
@@ -193,6 +194,8 @@ impl PriorityFront {
             stitch_phase(&lay, cfg.clone(), &dcfg, &mut outs, &mut rng, ctx)?
         };
         let grow_secs = t_grow.elapsed().as_secs_f64();
+        let regrown = inside_out_phase(&mut grown, &lay, &cfg, p, ctx)?;
+        num(&mut diag, "inside_out_faces", regrown as f64);
         let strays = ctx.phase("strays", || {
             strays::dissolve_stray_pieces(
                 &lay.pts,
@@ -518,6 +521,44 @@ fn fill_phase(m: &mut Mesher, p: &PriorityFrontParams) -> u64 {
     )
 }
 
+/// IMPL-CHOICE I19 (timed as `inside_out`): regions grown inside out are removed and
+/// grown again. Returns how many faces were removed.
+fn inside_out_phase(
+    grown: &mut Grown,
+    lay: &Layout,
+    cfg: &Cfg,
+    p: &PriorityFrontParams,
+    ctx: &mut RunCtx,
+) -> Result<usize, MethodError> {
+    let t0 = Instant::now();
+    let g = inside_out::Regrow {
+        pts: &lay.pts,
+        grid: &lay.grid,
+        cfg,
+        refused0: &lay.refused0,
+        close_max: p.close_holes_max,
+        fill: fill_bounds(p, cfg),
+    };
+    let mesh = peel::PeelMesh {
+        tris: &mut grown.tris,
+        state: &mut grown.state,
+        loops: &mut grown.loops,
+    };
+    let removed = inside_out::regrow_inside_out(&g, mesh, p.inside_out_min_faces, ctx)?;
+    end_phase(ctx, "inside_out", t0);
+    Ok(removed)
+}
+
+/// The IMPL-CHOICE I15 fill bounds at radius `cfg.r`.
+fn fill_bounds(p: &PriorityFrontParams, cfg: &Cfg) -> peel::FillBounds {
+    peel::FillBounds {
+        max_edge: p.fill_holes_max_edge * cfg.r,
+        edge_rel: p.fill_holes_edge_rel,
+        max_loop: p.fill_holes_max_loop,
+        dp: p.fill_holes_dp,
+    }
+}
+
 /// IMPL-CHOICE I17 (timed as `peel`): the loops left open by the fill, retried with
 /// their rim faces removed. Returns how many were closed.
 fn peel_phase(
@@ -541,12 +582,7 @@ fn peel_phase(
                 state: &mut grown.state,
                 loops: &mut grown.loops,
             },
-            peel::FillBounds {
-                max_edge: p.fill_holes_max_edge * cfg.r,
-                edge_rel: p.fill_holes_edge_rel,
-                max_loop: p.fill_holes_max_loop,
-                dp: p.fill_holes_dp,
-            },
+            fill_bounds(p, cfg),
             p.fill_holes_peel,
         )
     })
@@ -646,7 +682,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} I18=strays<={} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} I18=strays<={} I19=inside_out>={} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -683,6 +719,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.fill_holes_dp,
         p.fill_holes_peel,
         p.stray_piece_max,
+        p.inside_out_min_faces,
         p.insert_covered,
         p.insert_height,
         p.insert_rel,

@@ -205,6 +205,12 @@ pub struct PriorityFrontParams {
     /// points freed for the completion (restart seeds grow such pieces over finished
     /// mesh). 0 = off (the paper). Default 20.
     pub stray_piece_max: usize,
+    /// IMPL-CHOICE I19: when loops are left open after growth, regions of at least this
+    /// many faces that point into the solid (ray parity against their piece's
+    /// majority) are removed with the faces touching them and their area is grown
+    /// again from the new border; kept only when fewer boundary edges remain. 0 = off
+    /// (the paper). Default 20.
+    pub inside_out_min_faces: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
     /// lies on its meshed neighbours' surface and projects into a triangle within the
     /// I12 height bound of it (a covered point; further above a chamfer for a crease
@@ -303,6 +309,7 @@ impl Default for PriorityFrontParams {
             insert_rel: 3.0,
             insert_quadric: true,
             stray_piece_max: 20,
+            inside_out_min_faces: 20,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -425,6 +432,12 @@ impl PriorityFrontParams {
             return Err(bad(
                 "stray_piece_max",
                 format!("must be at most 1000000, got {}", self.stray_piece_max),
+            ));
+        }
+        if self.inside_out_min_faces > 1_000_000_000 {
+            return Err(bad(
+                "inside_out_min_faces",
+                format!("must be at most 1e9, got {}", self.inside_out_min_faces),
             ));
         }
         if self.close_holes_max > 1_000_000 {
@@ -692,6 +705,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "stray_piece_max",
         Unit::Count,
         "I18: free the points of pieces of at most this many vertices lying within R of larger pieces (20)",
+    ),
+    ParamDoc::new(
+        "inside_out_min_faces",
+        Unit::Count,
+        "I19: regrow regions of at least this many faces that point into the solid, when loops are open (20; 0 = off)",
     ),
     ParamDoc::new(
         "insert_quadric",
