@@ -23,7 +23,7 @@ use super::complete::VertexFaces;
 use super::cross::plane_basis;
 use super::grid::Grid;
 use super::mesher::{ACCEPTED, Cfg, FREE, Mesher, tri_normal};
-use super::peel::{FillBounds, PeelMesh};
+use super::peel::{FillBounds, PeelMesh, half_edge_face};
 use crate::hc_it::cluster::UnionFind;
 
 /// Rays per face; a face is inside-out when most of them cross the surface an odd number
@@ -85,15 +85,10 @@ pub(super) fn regrow_inside_out(
         let (base, k) = (edges.len(), l.len());
         for i in 0..k {
             let (a, c) = (l[i], l[(i + 1) % k]);
-            let nrm = vf
-                .of(a)
-                .iter()
-                .map(|&f| kept[f as usize])
-                .find(|t| (0..3).any(|j| t[j] == a && t[(j + 1) % 3] == c))
-                .map_or(DVec3::ZERO, |t| {
-                    let p = t.map(|v| g.pts[v as usize]);
-                    tri_normal(p[0], p[1], p[2])
-                });
+            let nrm = half_edge_face(&kept, &vf, a, c, |_| false).map_or(DVec3::ZERO, |f| {
+                let p = kept[f as usize].map(|v| g.pts[v as usize]);
+                tri_normal(p[0], p[1], p[2])
+            });
             edges.push((a, c, (base + (i + 1) % k) as u32, nrm, 0.0));
         }
     }
@@ -232,12 +227,7 @@ fn large_regions(tris: &[[u32; 3]], flag: &[bool], min_faces: usize, n: usize) -
 /// edges or none continues one (a border that is not a set of simple cycles).
 fn front_loops(tris: &[[u32; 3]], n: usize) -> Option<Vec<Vec<u32>>> {
     let vf = VertexFaces::new(n, tris);
-    let twin = |u: u32, v: u32| {
-        vf.of(v).iter().any(|&g| {
-            let t = tris[g as usize];
-            (0..3).any(|j| t[j] == v && t[(j + 1) % 3] == u)
-        })
-    };
+    let twin = |u: u32, v: u32| half_edge_face(tris, &vf, v, u, |_| false).is_some();
     const NO: u32 = u32::MAX;
     let mut next = vec![NO; n];
     for t in tris {

@@ -157,7 +157,7 @@ fn rings(tris: &[[u32; 3]], l: &[u32], vf: &VertexFaces, d: usize) -> Vec<u32> {
 }
 
 /// The face with half-edge `u -> v`, among those not `removed`, if any.
-fn half_edge_face(
+pub(super) fn half_edge_face(
     tris: &[[u32; 3]],
     vf: &VertexFaces,
     u: u32,
