@@ -7,8 +7,8 @@
 //! seam or a fold along it, often with a false handle. Winding cannot show such a
 //! region (it agrees with its neighbours), but the ray parity can: a ray leaving a face
 //! on its normal side crosses the surface an even number of times when that side is
-//! the outside. Each face votes with five rays; in every piece the faces whose vote
-//! disagrees with the piece's majority, in edge-connected regions of at least
+//! the outside. Each face votes with one ray, and a face against its piece's majority
+//! is confirmed with five; the confirmed faces, in edge-connected regions of at least
 //! `min_faces`, are removed with the faces touching them, their points become Free,
 //! and the growth resumes from the new border (the same growth, from rightly wound
 //! fronts). The result is kept only when it leaves fewer open boundary edges.
@@ -22,8 +22,8 @@ use reconbench_geom::spatial::MeshBvh;
 use super::complete::VertexFaces;
 use super::cross::plane_basis;
 use super::grid::Grid;
-use super::mesher::{ACCEPTED, Cfg, FREE, Mesher, tri_normal};
-use super::peel::{FillBounds, PeelMesh, half_edge_face};
+use super::mesher::Cfg;
+use super::peel::{FillBounds, PeelMesh, half_edge_face, mesher_from_faces};
 use crate::hc_it::cluster::UnionFind;
 
 /// Rays per face; a face is inside-out when most of them cross the surface an odd number
@@ -78,35 +78,8 @@ pub(super) fn regrow_inside_out(
     let Some(fronts) = front_loops(&kept, n) else {
         return Ok(0);
     };
-    let mut m = Mesher::new(g.pts, g.grid, g.cfg.clone(), g.refused0);
-    let vf = VertexFaces::new(n, &kept);
-    let mut edges = Vec::new();
-    for l in &fronts {
-        let (base, k) = (edges.len(), l.len());
-        for i in 0..k {
-            let (a, c) = (l[i], l[(i + 1) % k]);
-            let nrm = half_edge_face(&kept, &vf, a, c, |_| false).map_or(DVec3::ZERO, |f| {
-                let p = kept[f as usize].map(|v| g.pts[v as usize]);
-                tri_normal(p[0], p[1], p[2])
-            });
-            edges.push((a, c, (base + (i + 1) % k) as u32, nrm, 0.0));
-        }
-    }
-    let mut has_face = vec![false; n];
-    for &v in kept.iter().flatten() {
-        has_face[v as usize] = true;
-    }
-    let accepted: Vec<u32> = (0..n as u32).filter(|&v| has_face[v as usize]).collect();
-    let base = m.e_a.len() as u32;
-    m.import(&kept, &accepted, &edges);
-    for (v, s) in m.state.iter_mut().enumerate() {
-        *s = match (has_face[v], mesh.state[v]) {
-            (true, _) => ACCEPTED,
-            (false, ACCEPTED) => FREE,
-            (false, old) => old,
-        };
-    }
-    let all: Vec<u32> = (base..m.e_a.len() as u32).collect();
+    let mut m = mesher_from_faces(g.pts, g.grid, g.cfg, g.refused0, &kept, &fronts, mesh.state);
+    let all: Vec<u32> = (0..m.e_a.len() as u32).collect();
     m.push_only(&all);
     m.grow(ctx)?;
     m.close_small_holes(g.close_max);

@@ -220,7 +220,6 @@ fn refill(
     peels: &[Peel],
     b: FillBounds,
 ) -> u64 {
-    let n = pts.len();
     let mut gone = vec![false; mesh.tris.len()];
     let mut peeled = vec![false; mesh.loops.len()];
     for p in peels {
@@ -236,7 +235,6 @@ fn refill(
         .filter(|(_, g)| !**g)
         .map(|(t, _)| *t)
         .collect();
-    let vf = VertexFaces::new(n, &kept);
     let fronts = mesh
         .loops
         .iter()
@@ -244,35 +242,7 @@ fn refill(
         .filter(|(_, p)| !**p)
         .map(|(l, _)| l)
         .chain(peels.iter().map(|p| &p.grown));
-    let mut edges = Vec::new();
-    for l in fronts {
-        let (base, k) = (edges.len(), l.len());
-        for i in 0..k {
-            let (a, c) = (l[i], l[(i + 1) % k]);
-            // The face on the mesh side of front edge a -> c has half-edge a -> c.
-            let nrm = half_edge_face(&kept, &vf, a, c, |_| false).map_or(DVec3::ZERO, |f| {
-                let t = kept[f as usize].map(|v| pts[v as usize]);
-                tri_normal(t[0], t[1], t[2])
-            });
-            edges.push((a, c, (base + (i + 1) % k) as u32, nrm, 0.0));
-        }
-    }
-    let mut has_face = vec![false; n];
-    for t in &kept {
-        for &v in t {
-            has_face[v as usize] = true;
-        }
-    }
-    let accepted: Vec<u32> = (0..n as u32).filter(|&v| has_face[v as usize]).collect();
-    let mut m = Mesher::new(pts, grid, cfg.clone(), refused0);
-    m.import(&kept, &accepted, &edges);
-    for (v, s) in m.state.iter_mut().enumerate() {
-        *s = match (has_face[v], mesh.state[v]) {
-            (true, _) => ACCEPTED,
-            (false, ACCEPTED) => FREE,
-            (false, old) => old,
-        };
-    }
+    let mut m = mesher_from_faces(pts, grid, cfg, refused0, &kept, fronts, mesh.state);
     let todo: Vec<Vec<u32>> = peels.iter().map(|p| p.grown.clone()).collect();
     m.fill_loops(todo, b.max_edge, b.edge_rel, b.dp);
     let failed: Vec<&Peel> = peels
@@ -301,6 +271,50 @@ fn refill(
     *mesh.state = state;
     *mesh.loops = loops;
     closed
+}
+
+/// A mesher over faces `kept` whose live front is `fronts` (vertex cycles in front
+/// order). Points with a face are Accepted, points that had one in `state` and lost it
+/// are Free, the others keep their `state`.
+pub(super) fn mesher_from_faces<'g, 'l>(
+    pts: &'g [DVec3],
+    grid: &'g Grid,
+    cfg: &Cfg,
+    refused0: &[bool],
+    kept: &[[u32; 3]],
+    fronts: impl IntoIterator<Item = &'l Vec<u32>>,
+    state: &[u8],
+) -> Mesher<'g> {
+    let n = pts.len();
+    let vf = VertexFaces::new(n, kept);
+    let mut edges = Vec::new();
+    for l in fronts {
+        let (base, k) = (edges.len(), l.len());
+        for i in 0..k {
+            let (a, c) = (l[i], l[(i + 1) % k]);
+            // The face on the mesh side of front edge a -> c has half-edge a -> c.
+            let nrm = half_edge_face(kept, &vf, a, c, |_| false).map_or(DVec3::ZERO, |f| {
+                let t = kept[f as usize].map(|v| pts[v as usize]);
+                tri_normal(t[0], t[1], t[2])
+            });
+            edges.push((a, c, (base + (i + 1) % k) as u32, nrm, 0.0));
+        }
+    }
+    let mut has_face = vec![false; n];
+    for &v in kept.iter().flatten() {
+        has_face[v as usize] = true;
+    }
+    let accepted: Vec<u32> = (0..n as u32).filter(|&v| has_face[v as usize]).collect();
+    let mut m = Mesher::new(pts, grid, cfg.clone(), refused0);
+    m.import(kept, &accepted, &edges);
+    for (v, s) in m.state.iter_mut().enumerate() {
+        *s = match (has_face[v], state[v]) {
+            (true, _) => ACCEPTED,
+            (false, ACCEPTED) => FREE,
+            (false, old) => old,
+        };
+    }
+    m
 }
 
 #[cfg(test)]
