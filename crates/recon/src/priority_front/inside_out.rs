@@ -21,9 +21,8 @@ use reconbench_geom::spatial::MeshBvh;
 
 use super::complete::VertexFaces;
 use super::cross::plane_basis;
-use super::grid::Grid;
-use super::mesher::Cfg;
-use super::peel::{FillBounds, PeelMesh, half_edge_face, mesher_from_faces};
+use super::peel::PeelMesh;
+use super::regrow::{Regrow, regrow_without};
 use crate::hc_it::cluster::UnionFind;
 
 /// Rays per face; a face is inside-out when most of them cross the surface an odd number
@@ -32,17 +31,6 @@ const RAYS: usize = 5;
 
 /// Crossings after which a ray is given up (a ray grazing a fold can hit it repeatedly).
 const MAX_HITS: usize = 64;
-
-/// The growth context of the regrowth.
-pub(super) struct Regrow<'a> {
-    pub pts: &'a [DVec3],
-    pub grid: &'a Grid,
-    pub cfg: &'a Cfg,
-    pub refused0: &'a [bool],
-    /// `close_holes_max` (IMPL-CHOICE I7).
-    pub close_max: usize,
-    pub fill: FillBounds,
-}
 
 /// Removes the inside-out regions of at least `min_faces` faces and regrows their area
 /// (see the module doc). Returns the number of faces removed (0 when nothing changed).
@@ -68,32 +56,7 @@ pub(super) fn regrow_inside_out(
             touched[v as usize] = true;
         }
     }
-    let kept: Vec<[u32; 3]> = mesh
-        .tris
-        .iter()
-        .filter(|t| !t.iter().any(|&v| touched[v as usize]))
-        .copied()
-        .collect();
-    let removed = mesh.tris.len() - kept.len();
-    let Some(fronts) = front_loops(&kept, n) else {
-        return Ok(0);
-    };
-    let mut m = mesher_from_faces(g.pts, g.grid, g.cfg, g.refused0, &kept, &fronts, mesh.state);
-    let all: Vec<u32> = (0..m.e_a.len() as u32).collect();
-    m.push_only(&all);
-    m.grow(ctx)?;
-    m.close_small_holes(g.close_max);
-    let b = g.fill;
-    m.fill_holes(b.max_edge, b.edge_rel, b.max_loop, b.dp);
-    let loops = m.loops();
-    let open = |ls: &[Vec<u32>]| ls.iter().map(Vec::len).sum::<usize>();
-    if open(&loops) >= open(mesh.loops) {
-        return Ok(0);
-    }
-    *mesh.tris = std::mem::take(&mut m.tris);
-    *mesh.state = std::mem::take(&mut m.state);
-    *mesh.loops = loops;
-    Ok(removed)
+    regrow_without(g, mesh, &touched, ctx)
 }
 
 /// Per face: whether its ray-parity side (see [`outward`]) differs from the majority of
@@ -195,56 +158,14 @@ fn large_regions(tris: &[[u32; 3]], flag: &[bool], min_faces: usize, n: usize) -
         .collect()
 }
 
-/// The border of `tris` as front loops (vertex cycles whose edge `l[i] -> l[i + 1]` is a
-/// half-edge of the face on its mesh side), or `None` when a vertex starts two border
-/// edges or none continues one (a border that is not a set of simple cycles).
-fn front_loops(tris: &[[u32; 3]], n: usize) -> Option<Vec<Vec<u32>>> {
-    let vf = VertexFaces::new(n, tris);
-    let twin = |u: u32, v: u32| half_edge_face(tris, &vf, v, u, |_| false).is_some();
-    const NO: u32 = u32::MAX;
-    let mut next = vec![NO; n];
-    for t in tris {
-        for k in 0..3 {
-            let (u, v) = (t[k], t[(k + 1) % 3]);
-            if !twin(u, v) {
-                if next[u as usize] != NO {
-                    return None;
-                }
-                next[u as usize] = v;
-            }
-        }
-    }
-    let mut seen = vec![false; n];
-    let mut loops = Vec::new();
-    for s in 0..n as u32 {
-        if next[s as usize] == NO || seen[s as usize] {
-            continue;
-        }
-        let mut l = Vec::new();
-        let mut v = s;
-        while !seen[v as usize] {
-            seen[v as usize] = true;
-            l.push(v);
-            v = next[v as usize];
-            if v == NO {
-                return None;
-            }
-        }
-        if v != s {
-            return None;
-        }
-        loops.push(l);
-    }
-    Some(loops)
-}
-
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
+    use crate::priority_front::regrow::simple_cut;
 
     /// A closed unit sphere: `m` rings of `2 m` vertices between two poles, wound
     /// outward.
-    fn sphere(m: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    pub(in crate::priority_front) fn sphere(m: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         let k = 2 * m;
         let mut pts = vec![DVec3::Z, -DVec3::Z];
         for i in 0..m {
@@ -283,7 +204,8 @@ mod tests {
             })
             .sum();
         assert!(vol > 3.5, "{vol}");
-        assert!(front_loops(&tris, pts.len()).unwrap().is_empty());
+        let none = vec![false; pts.len()];
+        assert!(simple_cut(&tris, &none, 0, pts.len()).unwrap().1.is_empty());
     }
 
     /// Ray parity flags exactly the faces wound into the solid: none on the outward
@@ -312,45 +234,5 @@ mod tests {
                 .iter()
                 .any(|&r| r)
         );
-    }
-
-    /// Without the faces of one ring the sphere's border is two loops whose edges are
-    /// half-edges of the faces beside them; a vertex starting two border edges (two
-    /// holes touching at it) makes the border unusable.
-    #[test]
-    fn front_loops_follow_the_faces_and_refuse_a_pinched_border() {
-        let (pts, tris) = sphere(6);
-        let k = 12;
-        let on_ring = |v: u32| (2 + 2 * k..2 + 3 * k).contains(&v);
-        let kept: Vec<[u32; 3]> = tris
-            .iter()
-            .filter(|t| {
-                !(t.iter()
-                    .all(|&v| on_ring(v) || (2 + 3 * k..2 + 4 * k).contains(&v)))
-            })
-            .copied()
-            .collect();
-        let loops = front_loops(&kept, pts.len()).expect("simple loops");
-        assert_eq!(loops.len(), 2, "{loops:?}");
-        for l in &loops {
-            assert_eq!(l.len(), k as usize);
-            for i in 0..l.len() {
-                let (a, b) = (l[i], l[(i + 1) % l.len()]);
-                let n = kept
-                    .iter()
-                    .filter(|t| (0..3).any(|j| t[j] == a && t[(j + 1) % 3] == b))
-                    .count();
-                assert_eq!(n, 1, "{a} -> {b}");
-            }
-        }
-        // Two triangles of a fan around the north pole removed, not adjacent: the pole
-        // starts two border edges.
-        let pinched: Vec<[u32; 3]> = tris
-            .iter()
-            .enumerate()
-            .filter(|(f, _)| *f != 0 && *f != 3 * 2 * 6)
-            .map(|(_, t)| *t)
-            .collect();
-        assert!(front_loops(&pinched, pts.len()).is_none());
     }
 }

@@ -37,6 +37,7 @@ mod orient;
 mod parallel;
 pub mod params;
 mod peel;
+mod regrow;
 mod run;
 mod seed;
 mod strays;
@@ -91,6 +92,17 @@ struct Grown {
     state: Vec<u8>,
     loops: Vec<Vec<u32>>,
     stats: Stats,
+}
+
+impl Grown {
+    /// The faces, point states and loops, for the repairs that rebuild them.
+    fn mesh(&mut self) -> peel::PeelMesh<'_> {
+        peel::PeelMesh {
+            tris: &mut self.tris,
+            state: &mut self.state,
+            loops: &mut self.loops,
+        }
+    }
 }
 
 impl Reconstructor for PriorityFront {
@@ -211,6 +223,8 @@ impl PriorityFront {
         num(&mut diag, "holes_peeled", peeled as f64);
         let inserted = insert_phase(&mut grown, &lay, p, rho, ctx);
         num(&mut diag, "inserted_points", inserted as f64);
+        let regrown_loops = regrow_loops_phase(&mut grown, &lay, &cfg, p, rho, ctx)?;
+        num(&mut diag, "loops_regrown", regrown_loops as f64);
 
         // M9: Free points become Refused; map back to input indices.
         let (mut faces, refused) = output_phase(&grown, &lay.order, n, ctx);
@@ -531,22 +545,53 @@ fn inside_out_phase(
     ctx: &mut RunCtx,
 ) -> Result<usize, MethodError> {
     let t0 = Instant::now();
-    let g = inside_out::Regrow {
+    let removed = inside_out::regrow_inside_out(
+        &regrow_ctx(lay, cfg, p, None),
+        grown.mesh(),
+        p.inside_out_min_faces,
+        ctx,
+    )?;
+    end_phase(ctx, "inside_out", t0);
+    Ok(removed)
+}
+
+/// IMPL-CHOICE I20 (timed as `regrow_loops`): the loops left open by the fills, grown
+/// again from a wider border. Returns how many regrowths were kept.
+fn regrow_loops_phase(
+    grown: &mut Grown,
+    lay: &Layout,
+    cfg: &Cfg,
+    p: &PriorityFrontParams,
+    rho: f64,
+    ctx: &mut RunCtx,
+) -> Result<u64, MethodError> {
+    if grown.loops.is_empty() || p.regrow_loops_depth == 0 {
+        return Ok(0);
+    }
+    let t0 = Instant::now();
+    let insert = p.insert_covered.then(|| cover_bound(p, rho));
+    let g = regrow_ctx(lay, cfg, p, insert);
+    let kept = regrow::regrow_open_loops(&g, grown.mesh(), p.regrow_loops_depth, ctx)?;
+    end_phase(ctx, "regrow_loops", t0);
+    Ok(kept)
+}
+
+/// The growth context of the regrowths of I19 and I20.
+fn regrow_ctx<'a>(
+    lay: &'a Layout,
+    cfg: &'a Cfg,
+    p: &PriorityFrontParams,
+    insert: Option<complete::CoverBound>,
+) -> regrow::Regrow<'a> {
+    regrow::Regrow {
         pts: &lay.pts,
         grid: &lay.grid,
         cfg,
         refused0: &lay.refused0,
         close_max: p.close_holes_max,
         fill: fill_bounds(p, cfg),
-    };
-    let mesh = peel::PeelMesh {
-        tris: &mut grown.tris,
-        state: &mut grown.state,
-        loops: &mut grown.loops,
-    };
-    let removed = inside_out::regrow_inside_out(&g, mesh, p.inside_out_min_faces, ctx)?;
-    end_phase(ctx, "inside_out", t0);
-    Ok(removed)
+        insert,
+    }
 }
 
 /// The IMPL-CHOICE I15 fill bounds at radius `cfg.r`.
@@ -577,11 +622,7 @@ fn peel_phase(
             &lay.grid,
             cfg,
             &lay.refused0,
-            peel::PeelMesh {
-                tris: &mut grown.tris,
-                state: &mut grown.state,
-                loops: &mut grown.loops,
-            },
+            grown.mesh(),
             fill_bounds(p, cfg),
             p.fill_holes_peel,
         )
@@ -607,17 +648,22 @@ fn insert_phase(
             &mut grown.tris,
             &mut grown.state,
             &lay.refused0,
-            complete::CoverBound {
-                h_abs: p.free_inside_height * rho,
-                h_rel: p.free_inside_rel,
-                radius: p.k * rho,
-                plane_radius: 2.5 * rho,
-                plane_abs: p.insert_height * rho,
-                plane_rel: p.insert_rel,
-                quadric: p.insert_quadric,
-            },
+            cover_bound(p, rho),
         )
     })
+}
+
+/// The bounds of the IMPL-CHOICE I15 point insertion.
+fn cover_bound(p: &PriorityFrontParams, rho: f64) -> complete::CoverBound {
+    complete::CoverBound {
+        h_abs: p.free_inside_height * rho,
+        h_rel: p.free_inside_rel,
+        radius: p.k * rho,
+        plane_radius: 2.5 * rho,
+        plane_abs: p.insert_height * rho,
+        plane_rel: p.insert_rel,
+        quadric: p.insert_quadric,
+    }
 }
 
 /// M9 (timed as `output`): the faces in input indices and the sorted input indices of
@@ -682,7 +728,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} I18=strays<={} I19=inside_out>={} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} I18=strays<={} I19=inside_out>={} I20=regrow_loops<={} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -720,6 +766,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.fill_holes_peel,
         p.stray_piece_max,
         p.inside_out_min_faces,
+        p.regrow_loops_depth,
         p.insert_covered,
         p.insert_height,
         p.insert_rel,

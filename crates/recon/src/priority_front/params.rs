@@ -211,6 +211,11 @@ pub struct PriorityFrontParams {
     /// again from the new border; kept only when fewer boundary edges remain. 0 = off
     /// (the paper). Default 20.
     pub inside_out_min_faces: usize,
+    /// IMPL-CHOICE I20: a loop still open after the fills is grown again after the
+    /// faces within d vertex steps of it are removed, for d = 1 up to this depth; a
+    /// regrowth is kept only when it leaves fewer open boundary edges, no more handles
+    /// and no more unmeshed points. 0 = off (the paper). Default 3.
+    pub regrow_loops_depth: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
     /// lies on its meshed neighbours' surface and projects into a triangle within the
     /// I12 height bound of it (a covered point; further above a chamfer for a crease
@@ -310,6 +315,7 @@ impl Default for PriorityFrontParams {
             insert_quadric: true,
             stray_piece_max: 20,
             inside_out_min_faces: 20,
+            regrow_loops_depth: 3,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -438,6 +444,12 @@ impl PriorityFrontParams {
             return Err(bad(
                 "inside_out_min_faces",
                 format!("must be at most 1e9, got {}", self.inside_out_min_faces),
+            ));
+        }
+        if self.regrow_loops_depth > 8 {
+            return Err(bad(
+                "regrow_loops_depth",
+                format!("must be at most 8, got {}", self.regrow_loops_depth),
             ));
         }
         if self.close_holes_max > 1_000_000 {
@@ -710,6 +722,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "inside_out_min_faces",
         Unit::Count,
         "I19: regrow regions of at least this many faces that point into the solid, when loops are open (20; 0 = off)",
+    ),
+    ParamDoc::new(
+        "regrow_loops_depth",
+        Unit::Count,
+        "I20: regrow each loop left open by the fills without the faces within 1 to this many vertex steps of it (3; 0 = off)",
     ),
     ParamDoc::new(
         "insert_quadric",
