@@ -216,6 +216,12 @@ pub struct PriorityFrontParams {
     /// regrowth is kept only when it leaves fewer open boundary edges, no more handles
     /// and no more unmeshed points. 0 = off (the paper). Default 3.
     pub regrow_loops_depth: usize,
+    /// IMPL-CHOICE I21: a point left unmeshed within R of the mesh (at most 64 per run,
+    /// nearest first) is offered to a regrowth of the faces within d vertex steps of
+    /// the meshed points near it, for d = 0 up to this depth minus one; kept only when
+    /// fewer points stay unmeshed, with the same pieces and no handle or open edge
+    /// more. 0 = off (the paper). Default 5.
+    pub regrow_points_depth: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
     /// lies on its meshed neighbours' surface and projects into a triangle within the
     /// I12 height bound of it (a covered point; further above a chamfer for a crease
@@ -316,6 +322,7 @@ impl Default for PriorityFrontParams {
             stray_piece_max: 20,
             inside_out_min_faces: 20,
             regrow_loops_depth: 3,
+            regrow_points_depth: 5,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -444,6 +451,12 @@ impl PriorityFrontParams {
             return Err(bad(
                 "inside_out_min_faces",
                 format!("must be at most 1e9, got {}", self.inside_out_min_faces),
+            ));
+        }
+        if self.regrow_points_depth > 8 {
+            return Err(bad(
+                "regrow_points_depth",
+                format!("must be at most 8, got {}", self.regrow_points_depth),
             ));
         }
         if self.regrow_loops_depth > 8 {
@@ -727,6 +740,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "regrow_loops_depth",
         Unit::Count,
         "I20: regrow each loop left open by the fills without the faces within 1 to this many vertex steps of it (3; 0 = off)",
+    ),
+    ParamDoc::new(
+        "regrow_points_depth",
+        Unit::Count,
+        "I21: offer each unmeshed point within R of the mesh to a regrowth of the faces within 0 to this many minus one vertex steps of its meshed neighbours (5; 0 = off)",
     ),
     ParamDoc::new(
         "insert_quadric",

@@ -1,6 +1,6 @@
-//! Regrowth of a damaged area, and IMPL-CHOICE I20 (not in the paper; issue 20;
-//! `regrow_loops_depth`): the loops still open after the fills, grown again from a
-//! wider border.
+//! Regrowth of a damaged area: IMPL-CHOICE I20 (not in the paper; issue 20;
+//! `regrow_loops_depth`), the loops still open after the fills grown again from a
+//! wider border, and I21, the points left unmeshed offered to such a regrowth.
 //!
 //! Where two fronts meet at a crease or at a narrow wall, the last faces made often
 //! bridge the wrong sheets or fold over one another beside the gap: on the real fandisk
@@ -21,6 +21,15 @@
 //! `regrow_loops_depth`, and then the loop is left as it was. Loops are tried shortest
 //! first, at most [`MAX_LOOPS`] of them: each try rebuilds the front over the whole
 //! mesh, so its cost is linear in the cloud.
+//!
+//! IMPL-CHOICE I21 (`regrow_points_depth`) applies the same regrowth to the points
+//! still unmeshed after the insertion (box corners above the chamfer growth cut under
+//! them, points beside folds): each one with a meshed point within R is released from
+//! the hold and offered to a regrowth of the faces within d = 0, 1, ... vertex steps of
+//! those meshed points; the result is kept when fewer points stay Free, with the same
+//! pieces, no handle and no open edge more. Nearest points first, at most
+//! [`MAX_POINTS`], and not at all when more than [`MAX_FREE_SHARE`] of the cloud is
+//! Free: the regrowth would take outliers near the surface as readily.
 //!
 //! The removal and regrowth is shared with IMPL-CHOICE I19 (`inside_out.rs`), which
 //! applies it to whole regions grown inside out.
@@ -53,6 +62,16 @@ pub(super) struct Regrow<'a> {
 /// Loops tried by I20 per run (see the module doc).
 const MAX_LOOPS: usize = 64;
 
+/// Points tried by I21 per run (see the module doc).
+const MAX_POINTS: usize = 64;
+
+/// Share of Free points above which I21 does not run. The regrowth cannot tell an
+/// outlier near the surface from a surface point the growth missed (it takes both);
+/// the leftovers of a clean scan are a few per thousand at most (0.15 % on the real
+/// sets), while a cloud with outliers leaves their share Free (5-40 % in
+/// `li_outliers`).
+const MAX_FREE_SHARE: f64 = 0.005;
+
 /// A regrown mesh, not yet accepted.
 struct Candidate {
     tris: Vec<[u32; 3]>,
@@ -70,7 +89,7 @@ pub(super) fn regrow_without(
     touched: &[bool],
     ctx: &RunCtx,
 ) -> Result<usize, MethodError> {
-    let Some((c, removed)) = candidate(g, &mesh, touched, CUT_I19, ctx)? else {
+    let Some((c, removed)) = candidate(g, &mesh, touched, CUT_I19, &[], ctx)? else {
         return Ok(0);
     };
     if open_edges(&c.loops) >= open_edges(mesh.loops) {
@@ -91,7 +110,6 @@ pub(super) fn regrow_open_loops(
     if max_depth == 0 {
         return Ok(0);
     }
-    let n = g.pts.len();
     // A loop is named by its smallest vertex: a kept regrowth rebuilds the loop list,
     // and a loop it leaves untouched keeps its name and is not tried twice.
     let mut tried: HashSet<u32> = HashSet::new();
@@ -107,20 +125,110 @@ pub(super) fn regrow_open_loops(
             break;
         };
         tried.insert(*l.iter().min().expect("loops are not empty"));
-        let before = Score::of(&mesh, n);
-        for d in 1..=max_depth {
-            let touched = within_steps(mesh.tris, &l, d, n);
-            let Some((c, _)) = candidate(g, &mesh, &touched, CUT_I20, ctx)? else {
-                continue;
-            };
-            if Score::of_candidate(&c, n).better_than(&before) {
-                accept(mesh.reborrow(), c);
-                kept += 1;
-                break;
-            }
-        }
+        let try_ = Try {
+            around: &l,
+            depths: 1..=max_depth,
+            release: &[],
+            keep: Score::closes_more,
+        };
+        kept += u64::from(try_.run(g, &mut mesh, ctx)?);
     }
     Ok(kept)
+}
+
+/// IMPL-CHOICE I21: each unmeshed point near the mesh is offered to a regrowth of the
+/// faces around it (see the module doc). Returns the number of regrowths kept.
+pub(super) fn regrow_free_points(
+    g: &Regrow,
+    mut mesh: PeelMesh,
+    max_depth: usize,
+    ctx: &RunCtx,
+) -> Result<u64, MethodError> {
+    if max_depth == 0 {
+        return Ok(0);
+    }
+    let mut kept = 0;
+    for (p, near) in free_near_mesh(g, &mesh) {
+        if mesh.state[p as usize] != FREE {
+            continue; // taken by an earlier regrowth
+        }
+        let try_ = Try {
+            around: &near,
+            depths: 0..=max_depth - 1,
+            release: &[p],
+            keep: Score::meshes_more,
+        };
+        kept += u64::from(try_.run(g, &mut mesh, ctx)?);
+    }
+    Ok(kept)
+}
+
+/// The Free points (not duplicates) with a meshed point within R, nearest first, each
+/// with those meshed points; none when more than [`MAX_FREE_SHARE`] of the points are
+/// Free (a cloud with outliers), at most [`MAX_POINTS`] otherwise.
+fn free_near_mesh(g: &Regrow, mesh: &PeelMesh) -> Vec<(u32, Vec<u32>)> {
+    let n = g.pts.len();
+    let free: Vec<usize> = (0..n)
+        .filter(|&v| mesh.state[v] == FREE && !g.refused0[v])
+        .collect();
+    if free.len() as f64 > MAX_FREE_SHARE * n as f64 {
+        return Vec::new();
+    }
+    let r = g.cfg.r;
+    let mut meshed = vec![false; n];
+    for &v in mesh.tris.iter().flatten() {
+        meshed[v as usize] = true;
+    }
+    let mut out: Vec<(f64, u32, Vec<u32>)> = Vec::new();
+    for p in free {
+        let pp = g.pts[p];
+        let mut near = Vec::new();
+        let mut closest = f64::INFINITY;
+        g.grid.for_cells(pp, r, |range| {
+            for w in range.filter(|&w| w < n && meshed[w]) {
+                let d2 = g.pts[w].distance_squared(pp);
+                if d2 <= r * r {
+                    near.push(w as u32);
+                    closest = closest.min(d2);
+                }
+            }
+        });
+        if !near.is_empty() {
+            out.push((closest, p as u32, near));
+        }
+    }
+    out.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    out.truncate(MAX_POINTS);
+    out.into_iter().map(|(_, p, near)| (p, near)).collect()
+}
+
+/// One regrowth attempt: cuts around the points `around` at each depth in turn (vertex
+/// steps, see [`within_steps`]), offers the held Free points in `release` to the
+/// regrowth, and keeps the first result that `keep` prefers to the mesh as it was.
+struct Try<'a, D> {
+    around: &'a [u32],
+    depths: D,
+    release: &'a [u32],
+    keep: fn(&Score, &Score) -> bool,
+}
+
+impl<D: Iterator<Item = usize>> Try<'_, D> {
+    /// Whether a regrowth was kept.
+    fn run(self, g: &Regrow, mesh: &mut PeelMesh, ctx: &RunCtx) -> Result<bool, MethodError> {
+        let n = g.pts.len();
+        let before = Score::of(mesh, n);
+        for d in self.depths {
+            let touched = within_steps(mesh.tris, self.around, d, n);
+            let Some((c, _)) = candidate(g, mesh, &touched, CUT_I20, self.release, ctx)? else {
+                continue;
+            };
+            if (self.keep)(&Score::of_candidate(&c, n), &before) {
+                accept(mesh.reborrow(), c);
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
 }
 
 /// The acceptance figures of I20: open boundary edges, pieces, twice the summed genus
@@ -151,13 +259,23 @@ impl Score {
         }
     }
 
-    /// Fewer open edges, no two pieces joined (a bridge between two sheets closes
-    /// their borders too), and neither a handle nor a Free point more.
-    fn better_than(&self, old: &Score) -> bool {
+    /// I20: fewer open edges, the same pieces (a bridge between two sheets closes
+    /// their borders too; nothing split off), and neither a handle nor a Free point
+    /// more.
+    fn closes_more(&self, old: &Score) -> bool {
         self.open < old.open
-            && self.pieces >= old.pieces
+            && self.pieces == old.pieces
             && self.twice_genus <= old.twice_genus
             && self.free <= old.free
+    }
+
+    /// I21: fewer Free points, the same pieces, and neither a handle nor an open edge
+    /// more.
+    fn meshes_more(&self, old: &Score) -> bool {
+        self.free < old.free
+            && self.pieces == old.pieces
+            && self.twice_genus <= old.twice_genus
+            && self.open <= old.open
     }
 }
 
@@ -249,6 +367,7 @@ fn candidate(
     mesh: &PeelMesh,
     touched: &[bool],
     rule: CutRule,
+    release: &[u32],
     ctx: &RunCtx,
 ) -> Result<Option<(Candidate, usize)>, MethodError> {
     let n = g.pts.len();
@@ -256,16 +375,19 @@ fn candidate(
         return Ok(None);
     };
     let removed = mesh.tris.len() - kept.len();
+    let mut hold: Vec<bool> = mesh
+        .state
+        .iter()
+        .map(|&s| rule.hold_free && s == FREE)
+        .collect();
+    for &v in release {
+        hold[v as usize] = false;
+    }
     let held: Vec<u8> = mesh
         .state
         .iter()
-        .map(|&s| {
-            if rule.hold_free && s == FREE {
-                REFUSED
-            } else {
-                s
-            }
-        })
+        .zip(&hold)
+        .map(|(&s, &h)| if h { REFUSED } else { s })
         .collect();
     let mut m = mesher_from_faces(g.pts, g.grid, g.cfg, g.refused0, &kept, &fronts, &held);
     let all: Vec<u32> = (0..m.e_a.len() as u32).collect();
@@ -288,9 +410,7 @@ fn candidate(
     if let Some(bound) = g.insert {
         // Splits interior faces and edges only: the loops stay as they are. With
         // `hold_free`, only the points the cut freed are offered.
-        let skip: Vec<bool> = (0..n)
-            .map(|v| g.refused0[v] || (rule.hold_free && mesh.state[v] == FREE))
-            .collect();
+        let skip: Vec<bool> = (0..n).map(|v| g.refused0[v] || hold[v]).collect();
         insert_covered(g.pts, g.grid, &mut c.tris, &mut c.state, &skip, bound);
     }
     Ok(Some((c, removed)))
