@@ -227,6 +227,8 @@ impl PriorityFront {
         num(&mut diag, "loops_regrown", regrown_loops as f64);
         let regrown_points = regrow_points_phase(&mut grown, &lay, &cfg, p, rho, ctx)?;
         num(&mut diag, "points_regrown", regrown_points as f64);
+        let handles = regrow_handles_phase(&mut grown, &lay, &cfg, p, rho, ctx)?;
+        num(&mut diag, "handles_regrown", f64::from(u8::from(handles)));
 
         // M9: Free points become Refused; map back to input indices.
         let (mut faces, refused) = output_phase(&grown, &lay.order, n, ctx);
@@ -600,7 +602,28 @@ fn regrow_points_phase(
     Ok(kept)
 }
 
-/// The growth context of the regrowths of I19, I20 and I21.
+/// IMPL-CHOICE I22 (timed as `regrow_handles`): with handles in the mesh, the faces
+/// around its sheet-crossing edges grown again. Returns whether a regrowth was kept.
+fn regrow_handles_phase(
+    grown: &mut Grown,
+    lay: &Layout,
+    cfg: &Cfg,
+    p: &PriorityFrontParams,
+    rho: f64,
+    ctx: &mut RunCtx,
+) -> Result<bool, MethodError> {
+    if p.regrow_handles_depth == 0 {
+        return Ok(false);
+    }
+    let t0 = Instant::now();
+    let insert = p.insert_covered.then(|| cover_bound(p, rho));
+    let g = regrow_ctx(lay, cfg, p, insert);
+    let kept = regrow::regrow_handles(&g, grown.mesh(), p.regrow_handles_depth, ctx)?;
+    end_phase(ctx, "regrow_handles", t0);
+    Ok(kept)
+}
+
+/// The growth context of the regrowths of I19 to I22.
 fn regrow_ctx<'a>(
     lay: &'a Layout,
     cfg: &'a Cfg,
@@ -752,7 +775,7 @@ fn record_stats(diag: &mut Diagnostics, grown: &Grown, pts: &[DVec3], p: &Priori
 fn assumption_flags(p: &PriorityFrontParams) -> String {
     format!(
         "A1={:?} A2=h:{}R A4=m:{} A5/A6=n:{} A9=outward:{} I16=orient_front:{} A11={:?} A12={} A16={} A17=mirror:{} \
-         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} I18=strays<={} I19=inside_out>={} I20=regrow_loops<={} I21=regrow_points<={} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
+         A10=min:{},cap:{} I1=flat<={} I5=elev<={}deg,h<={}rho I10=front_normal<={}deg I8=support:k{},share{},tol{}rho,r{}R I11=support_crease:{} cross={}R free_inside={},h<=max({}rho,{}edge) I13=interior_inside:{} I14=self_check:{} I6=front_inside:{} I7=close<={} I9=stitch_zip:{} I15=fill<=max({}R,{}edge),loop<={},dp:{} I17=peel:{} I18=strays<={} I19=inside_out>={} I20=regrow_loops<={} I21=regrow_points<={} I22=regrow_handles<={} insert:{},plane_h<=max({}rho,{}rms),quadric:{} threads={}",
         p.rho_sample,
         p.grid_cell,
         p.seed_patches,
@@ -792,6 +815,7 @@ fn assumption_flags(p: &PriorityFrontParams) -> String {
         p.inside_out_min_faces,
         p.regrow_loops_depth,
         p.regrow_points_depth,
+        p.regrow_handles_depth,
         p.insert_covered,
         p.insert_height,
         p.insert_rel,

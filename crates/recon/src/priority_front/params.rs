@@ -222,6 +222,12 @@ pub struct PriorityFrontParams {
     /// fewer points stay unmeshed, with the same pieces and no handle or open edge
     /// more. 0 = off (the paper). Default 5.
     pub regrow_points_depth: usize,
+    /// IMPL-CHOICE I22: when the mesh has handles, the faces within d vertex steps of
+    /// the ends of its sheet-crossing edges (edges along the cloud's local plane normal
+    /// at both ends) are grown again, for d = 0 up to this depth minus one; kept only
+    /// with fewer handles, the same pieces and no open edge or unmeshed point more.
+    /// 0 = off (the paper). Default 4.
+    pub regrow_handles_depth: usize,
     /// Surface completion, points (IMPL-CHOICE I15): every point left unmeshed that
     /// lies on its meshed neighbours' surface and projects into a triangle within the
     /// I12 height bound of it (a covered point; further above a chamfer for a crease
@@ -323,6 +329,7 @@ impl Default for PriorityFrontParams {
             inside_out_min_faces: 20,
             regrow_loops_depth: 3,
             regrow_points_depth: 5,
+            regrow_handles_depth: 4,
             restart: true,
             restart_min_points: 10,
             restart_radius_cap: 2.0,
@@ -451,6 +458,12 @@ impl PriorityFrontParams {
             return Err(bad(
                 "inside_out_min_faces",
                 format!("must be at most 1e9, got {}", self.inside_out_min_faces),
+            ));
+        }
+        if self.regrow_handles_depth > 8 {
+            return Err(bad(
+                "regrow_handles_depth",
+                format!("must be at most 8, got {}", self.regrow_handles_depth),
             ));
         }
         if self.regrow_points_depth > 8 {
@@ -740,6 +753,11 @@ pub const PARAM_DOCS: &[ParamDoc] = &[
         "regrow_loops_depth",
         Unit::Count,
         "I20: regrow each loop left open by the fills without the faces within 1 to this many vertex steps of it (3; 0 = off)",
+    ),
+    ParamDoc::new(
+        "regrow_handles_depth",
+        Unit::Count,
+        "I22: with handles in the mesh, regrow the faces within 0 to this many minus one vertex steps of its sheet-crossing edges (4; 0 = off)",
     ),
     ParamDoc::new(
         "regrow_points_depth",

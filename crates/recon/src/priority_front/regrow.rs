@@ -1,6 +1,7 @@
 //! Regrowth of a damaged area: IMPL-CHOICE I20 (not in the paper; issue 20;
 //! `regrow_loops_depth`), the loops still open after the fills grown again from a
-//! wider border, and I21, the points left unmeshed offered to such a regrowth.
+//! wider border; I21, the points left unmeshed offered to such a regrowth; I22, false
+//! handles cut at their sheet-crossing edges and grown again.
 //!
 //! Where two fronts meet at a crease or at a narrow wall, the last faces made often
 //! bridge the wrong sheets or fold over one another beside the gap: on the real fandisk
@@ -31,15 +32,25 @@
 //! [`MAX_POINTS`], and not at all when more than [`MAX_FREE_SHARE`] of the cloud is
 //! Free: the regrowth would take outliers near the surface as readily.
 //!
+//! IMPL-CHOICE I22 (`regrow_handles_depth`) applies it to false handles: when the mesh
+//! has handles, its edges that cross a thin part's thickness (edges of at least 0.75 R
+//! that run along the cloud's local plane normal at both ends, as across the bunny's
+//! ear) are found, the faces within d vertex steps of their ends are cut, and the
+//! regrowth is kept when it has fewer handles, the same pieces and no open edge or Free
+//! point more. The test costs a neighbour search at the ends of the long edges only.
+//!
 //! The removal and regrowth is shared with IMPL-CHOICE I19 (`inside_out.rs`), which
 //! applies it to whole regions grown inside out.
 
 use std::collections::HashSet;
 
 use glam::DVec3;
+use rayon::prelude::*;
+use reconbench_geom::linalg::{covariance, sym_eigen3_smallest};
 use reconbench_geom::method::{MethodError, RunCtx};
 
 use super::complete::{CoverBound, VertexFaces, insert_covered};
+use super::density::knn;
 use super::grid::Grid;
 use super::mesher::{Cfg, FREE, REFUSED};
 use super::peel::{FillBounds, PeelMesh, half_edge_face, mesher_from_faces};
@@ -231,6 +242,95 @@ impl<D: Iterator<Item = usize>> Try<'_, D> {
     }
 }
 
+/// IMPL-CHOICE I22: when the mesh has handles, the faces around its sheet-crossing
+/// edges are cut and grown again (see the module doc). Returns whether a regrowth was
+/// kept.
+pub(super) fn regrow_handles(
+    g: &Regrow,
+    mut mesh: PeelMesh,
+    max_depth: usize,
+    ctx: &RunCtx,
+) -> Result<bool, MethodError> {
+    let n = g.pts.len();
+    if max_depth == 0 {
+        return Ok(false);
+    }
+    let seeds = crossing_edge_ends(g, mesh.tris);
+    if seeds.is_empty() || Score::of(&mesh, n).twice_genus <= 0 {
+        return Ok(false);
+    }
+    let try_ = Try {
+        around: &seeds,
+        depths: 0..=max_depth - 1,
+        release: &[],
+        keep: Score::fewer_handles,
+    };
+    try_.run(g, &mut mesh, ctx)
+}
+
+/// Points whose neighbourhood plane the I22 test fits.
+const NORMAL_K: usize = 12;
+
+/// Edges shorter than this times R are not tested (an edge across a part's thickness
+/// spans it; most surface edges are shorter, and the test costs a neighbour search at
+/// each end).
+const MIN_CROSSING: f64 = 0.75;
+
+/// |cos| between an edge and the plane normals at both its ends above which the edge
+/// crosses between two sheets (an edge along the surface has |cos| near 0).
+const CROSSING_COS: f64 = 0.8;
+
+/// The ends (sorted) of the edges of `tris`, at least [`MIN_CROSSING`] R long, that run
+/// along the least-squares plane normal of the [`NORMAL_K`] nearest points of the cloud
+/// at both ends: edges across the thickness of a thin part (an ear), which make a false
+/// handle.
+fn crossing_edge_ends(g: &Regrow, tris: &[[u32; 3]]) -> Vec<u32> {
+    let n = g.pts.len();
+    let min2 = (MIN_CROSSING * g.cfg.r).powi(2);
+    let mut edges: Vec<(u32, u32)> = tris
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .filter(|&(u, v)| u < v && g.pts[u as usize].distance_squared(g.pts[v as usize]) > min2)
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    let mut ends: Vec<u32> = edges.iter().flat_map(|&(u, v)| [u, v]).collect();
+    ends.sort_unstable();
+    ends.dedup();
+    let normals: Vec<DVec3> = ends
+        .par_iter()
+        .map_init(Vec::new, |nb, &v| {
+            let keep = |i: usize| i < n && i != v as usize;
+            knn(
+                g.grid,
+                g.pts,
+                g.pts[v as usize],
+                NORMAL_K,
+                3.0 * g.cfg.r,
+                keep,
+                nb,
+            );
+            let q: Vec<DVec3> = nb.iter().map(|&(_, i)| g.pts[i as usize]).collect();
+            (q.len() >= 6)
+                .then(|| covariance(&q, None).ok())
+                .flatten()
+                .and_then(|c| sym_eigen3_smallest(c.matrix).ok())
+                .map_or(DVec3::ZERO, |e| e.vector)
+        })
+        .collect();
+    let normal = |w: u32| normals[ends.binary_search(&w).expect("an end")];
+    let mut out = Vec::new();
+    for (u, v) in edges {
+        let e = (g.pts[v as usize] - g.pts[u as usize]).normalize_or_zero();
+        if e.dot(normal(u)).abs() > CROSSING_COS && e.dot(normal(v)).abs() > CROSSING_COS {
+            out.extend([u, v]);
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 /// The acceptance figures of I20: open boundary edges, pieces, twice the summed genus
 /// and the number of Free points.
 struct Score {
@@ -266,6 +366,15 @@ impl Score {
         self.open < old.open
             && self.pieces == old.pieces
             && self.twice_genus <= old.twice_genus
+            && self.free <= old.free
+    }
+
+    /// I22: fewer handles, the same pieces, and neither an open edge nor a Free point
+    /// more.
+    fn fewer_handles(&self, old: &Score) -> bool {
+        self.twice_genus < old.twice_genus
+            && self.pieces == old.pieces
+            && self.open <= old.open
             && self.free <= old.free
     }
 
