@@ -395,6 +395,23 @@ fn params_serde_defaults_and_validation() {
         PriorityFront::new(bad),
         Err(MethodError::InvalidParameter { .. })
     ));
+    // The regrowth depths of I20-I22 are bounded (each depth costs a front rebuild).
+    for set in [
+        |p: &mut PriorityFrontParams| p.regrow_loops_depth = 9,
+        |p: &mut PriorityFrontParams| p.regrow_points_depth = 9,
+        |p: &mut PriorityFrontParams| p.regrow_handles_depth = 9,
+    ] {
+        let mut p = PriorityFrontParams::default();
+        set(&mut p);
+        let name = match PriorityFront::new(p) {
+            Err(MethodError::InvalidParameter { name, .. }) => name,
+            other => panic!("depth 9 accepted: {:?}", other.is_ok()),
+        };
+        assert!(
+            name.starts_with("regrow_") && name.ends_with("_depth"),
+            "{name}"
+        );
+    }
     assert_eq!(PriorityFront::default().name(), NAME);
     assert_eq!(NAME, "priority-front");
 }

@@ -223,12 +223,23 @@ impl PriorityFront {
         num(&mut diag, "holes_peeled", peeled as f64);
         let inserted = insert_phase(&mut grown, &lay, p, rho, ctx);
         num(&mut diag, "inserted_points", inserted as f64);
-        let regrown_loops = regrow_loops_phase(&mut grown, &lay, &cfg, p, rho, ctx)?;
-        num(&mut diag, "loops_regrown", regrown_loops as f64);
-        let regrown_points = regrow_points_phase(&mut grown, &lay, &cfg, p, rho, ctx)?;
-        num(&mut diag, "points_regrown", regrown_points as f64);
-        let handles = regrow_handles_phase(&mut grown, &lay, &cfg, p, rho, ctx)?;
-        num(&mut diag, "handles_regrown", f64::from(u8::from(handles)));
+        // I20-I22: loops, unmeshed points and false handles grown again.
+        let insert = p.insert_covered.then(|| cover_bound(p, rho));
+        let g = regrow_ctx(&lay, &cfg, p, insert);
+        let open = !grown.loops.is_empty() && p.regrow_loops_depth > 0;
+        let kept = regrow_step(ctx, "regrow_loops", open, |c| {
+            regrow::regrow_open_loops(&g, grown.mesh(), p.regrow_loops_depth, c)
+        })?;
+        num(&mut diag, "loops_regrown", kept as f64);
+        let free = grown.state.contains(&FREE) && p.regrow_points_depth > 0;
+        let kept = regrow_step(ctx, "regrow_points", free, |c| {
+            regrow::regrow_free_points(&g, grown.mesh(), p.regrow_points_depth, c)
+        })?;
+        num(&mut diag, "points_regrown", kept as f64);
+        let kept = regrow_step(ctx, "regrow_handles", p.regrow_handles_depth > 0, |c| {
+            regrow::regrow_handles(&g, grown.mesh(), p.regrow_handles_depth, c).map(u64::from)
+        })?;
+        num(&mut diag, "handles_regrown", kept as f64);
 
         // M9: Free points become Refused; map back to input indices.
         let (mut faces, refused) = output_phase(&grown, &lay.order, n, ctx);
@@ -559,68 +570,21 @@ fn inside_out_phase(
     Ok(removed)
 }
 
-/// IMPL-CHOICE I20 (timed as `regrow_loops`): the loops left open by the fills, grown
-/// again from a wider border. Returns how many regrowths were kept.
-fn regrow_loops_phase(
-    grown: &mut Grown,
-    lay: &Layout,
-    cfg: &Cfg,
-    p: &PriorityFrontParams,
-    rho: f64,
+/// A regrowth step of IMPL-CHOICE I20-I22, timed as phase `name` when `run`; returns
+/// what `step` counts.
+fn regrow_step(
     ctx: &mut RunCtx,
+    name: &str,
+    run: bool,
+    step: impl FnOnce(&RunCtx) -> Result<u64, MethodError>,
 ) -> Result<u64, MethodError> {
-    if grown.loops.is_empty() || p.regrow_loops_depth == 0 {
+    if !run {
         return Ok(0);
     }
     let t0 = Instant::now();
-    let insert = p.insert_covered.then(|| cover_bound(p, rho));
-    let g = regrow_ctx(lay, cfg, p, insert);
-    let kept = regrow::regrow_open_loops(&g, grown.mesh(), p.regrow_loops_depth, ctx)?;
-    end_phase(ctx, "regrow_loops", t0);
-    Ok(kept)
-}
-
-/// IMPL-CHOICE I21 (timed as `regrow_points`): the unmeshed points near the mesh,
-/// offered to a regrowth of the faces around them. Returns how many regrowths were
-/// kept.
-fn regrow_points_phase(
-    grown: &mut Grown,
-    lay: &Layout,
-    cfg: &Cfg,
-    p: &PriorityFrontParams,
-    rho: f64,
-    ctx: &mut RunCtx,
-) -> Result<u64, MethodError> {
-    if p.regrow_points_depth == 0 || !grown.state.contains(&FREE) {
-        return Ok(0);
-    }
-    let t0 = Instant::now();
-    let insert = p.insert_covered.then(|| cover_bound(p, rho));
-    let g = regrow_ctx(lay, cfg, p, insert);
-    let kept = regrow::regrow_free_points(&g, grown.mesh(), p.regrow_points_depth, ctx)?;
-    end_phase(ctx, "regrow_points", t0);
-    Ok(kept)
-}
-
-/// IMPL-CHOICE I22 (timed as `regrow_handles`): with handles in the mesh, the faces
-/// around its sheet-crossing edges grown again. Returns whether a regrowth was kept.
-fn regrow_handles_phase(
-    grown: &mut Grown,
-    lay: &Layout,
-    cfg: &Cfg,
-    p: &PriorityFrontParams,
-    rho: f64,
-    ctx: &mut RunCtx,
-) -> Result<bool, MethodError> {
-    if p.regrow_handles_depth == 0 {
-        return Ok(false);
-    }
-    let t0 = Instant::now();
-    let insert = p.insert_covered.then(|| cover_bound(p, rho));
-    let g = regrow_ctx(lay, cfg, p, insert);
-    let kept = regrow::regrow_handles(&g, grown.mesh(), p.regrow_handles_depth, ctx)?;
-    end_phase(ctx, "regrow_handles", t0);
-    Ok(kept)
+    let n = step(ctx)?;
+    end_phase(ctx, name, t0);
+    Ok(n)
 }
 
 /// The growth context of the regrowths of I19 to I22.

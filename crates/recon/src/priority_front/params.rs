@@ -460,23 +460,14 @@ impl PriorityFrontParams {
                 format!("must be at most 1e9, got {}", self.inside_out_min_faces),
             ));
         }
-        if self.regrow_handles_depth > 8 {
-            return Err(bad(
-                "regrow_handles_depth",
-                format!("must be at most 8, got {}", self.regrow_handles_depth),
-            ));
-        }
-        if self.regrow_points_depth > 8 {
-            return Err(bad(
-                "regrow_points_depth",
-                format!("must be at most 8, got {}", self.regrow_points_depth),
-            ));
-        }
-        if self.regrow_loops_depth > 8 {
-            return Err(bad(
-                "regrow_loops_depth",
-                format!("must be at most 8, got {}", self.regrow_loops_depth),
-            ));
+        for (name, depth) in [
+            ("regrow_loops_depth", self.regrow_loops_depth),
+            ("regrow_points_depth", self.regrow_points_depth),
+            ("regrow_handles_depth", self.regrow_handles_depth),
+        ] {
+            if depth > 8 {
+                return Err(bad(name, format!("must be at most 8, got {depth}")));
+            }
         }
         if self.close_holes_max > 1_000_000 {
             return Err(bad("close_holes_max", "must be <= 1000000"));
