@@ -27,17 +27,6 @@ pub(super) struct PeelMesh<'a> {
     pub loops: &'a mut Vec<Vec<u32>>,
 }
 
-impl PeelMesh<'_> {
-    /// The same mesh, borrowed again for a shorter time.
-    pub(super) fn reborrow(&mut self) -> PeelMesh<'_> {
-        PeelMesh {
-            tris: self.tris,
-            state: self.state,
-            loops: self.loops,
-        }
-    }
-}
-
 /// The fill bounds of IMPL-CHOICE I15 (see `Mesher::fill_holes`).
 #[derive(Clone, Copy)]
 pub(super) struct FillBounds {

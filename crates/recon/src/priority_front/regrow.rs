@@ -96,7 +96,7 @@ struct Candidate {
 /// the new border is not a set of simple cycles).
 pub(super) fn regrow_without(
     g: &Regrow,
-    mesh: PeelMesh,
+    mut mesh: PeelMesh,
     touched: &[bool],
     ctx: &RunCtx,
 ) -> Result<usize, MethodError> {
@@ -106,7 +106,7 @@ pub(super) fn regrow_without(
     if open_edges(&c.loops) >= open_edges(mesh.loops) {
         return Ok(0);
     }
-    accept(mesh, c);
+    accept(&mut mesh, c);
     Ok(removed)
 }
 
@@ -234,7 +234,7 @@ impl<D: Iterator<Item = usize>> Try<'_, D> {
                 continue;
             };
             if (self.keep)(&Score::of_candidate(&c, n), &before) {
-                accept(mesh.reborrow(), c);
+                accept(mesh, c);
                 return Ok(true);
             }
         }
@@ -289,8 +289,8 @@ fn crossing_edge_ends(g: &Regrow, tris: &[[u32; 3]]) -> Vec<u32> {
     let min2 = (MIN_CROSSING * g.cfg.r).powi(2);
     let mut edges: Vec<(u32, u32)> = tris
         .iter()
-        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
-        .filter(|&(u, v)| u < v && g.pts[u as usize].distance_squared(g.pts[v as usize]) > min2)
+        .flat_map(|t| (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+        .filter(|&(u, v)| g.pts[u as usize].distance_squared(g.pts[v as usize]) > min2)
         .collect();
     edges.sort_unstable();
     edges.dedup();
@@ -525,7 +525,8 @@ fn candidate(
     Ok(Some((c, removed)))
 }
 
-fn accept(mesh: PeelMesh, c: Candidate) {
+/// Puts the regrown mesh `c` in place of `mesh`.
+fn accept(mesh: &mut PeelMesh, c: Candidate) {
     *mesh.tris = c.tris;
     *mesh.state = c.state;
     *mesh.loops = c.loops;
